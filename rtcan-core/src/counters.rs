@@ -1,0 +1,48 @@
+//! Counters for everything dropped, late or aborted: nothing is lost silently.
+
+/// Engine counters (saturating).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Counters {
+    /// Frames received whose message ID nobody here subscribes to (filters let it pass).
+    pub rx_unknown_id: u32,
+    /// Fragments with a wrong DLC.
+    pub rx_bad_dlc: u32,
+    /// Fragments out of order (loss or overrun upstream).
+    pub rx_out_of_order: u32,
+    /// Transfers failing the CRC (frames of two transmissions mixed).
+    pub rx_crc: u32,
+    /// Malformed sync frames.
+    pub rx_bad_sync: u32,
+    /// Malformed heartbeats.
+    pub rx_bad_heartbeat: u32,
+    /// RX FIFO overruns reported by the driver.
+    pub rx_overrun: u32,
+    /// Messages delivered to the host.
+    pub rx_delivered: u32,
+    /// Frames sent.
+    pub tx_frames: u32,
+    /// Frames aborted at a window close (re-queued).
+    pub tx_aborted: u32,
+    /// Frames that failed (arbitration lost / error with no automatic retransmission).
+    pub tx_failed: u32,
+    /// SRT messages dropped because their deadline passed.
+    pub deadline_missed: u32,
+    /// Submissions refused because the queue was full.
+    pub queue_full: u32,
+    /// HRT slots where the host had nothing to send.
+    pub hrt_empty: u32,
+    /// HRT slots missed (handler ran too late).
+    pub hrt_late: u32,
+    /// Sync frames missed (cycles without sync on a slave).
+    pub sync_missed: u32,
+    /// Bus-off entries reported by the driver.
+    pub bus_off: u32,
+}
+
+impl Counters {
+    /// Adds one, saturating.
+    pub fn bump(c: &mut u32) {
+        *c = c.saturating_add(1);
+    }
+}
