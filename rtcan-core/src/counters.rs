@@ -12,6 +12,10 @@ pub struct Counters {
     pub rx_out_of_order: u32,
     /// Transfers failing the CRC (frames of two transmissions mixed).
     pub rx_crc: u32,
+    /// Transfers abandoned by the sender mid-way (a new first fragment arrived).
+    pub rx_incomplete: u32,
+    /// Frames for a topic whose configured size does not fit its buffer (a build bug).
+    pub rx_bad_size: u32,
     /// Malformed sync frames.
     pub rx_bad_sync: u32,
     /// Malformed heartbeats.

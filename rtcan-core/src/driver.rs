@@ -82,4 +82,8 @@ pub trait Host {
     fn deliver(&mut self, rx: u8, payload: &[u8], sof: Nanos);
     /// A protocol event.
     fn event(&mut self, event: Event);
+    /// State byte this module announces in its heartbeat (middleware defined).
+    fn module_state(&self) -> u8 {
+        0
+    }
 }

@@ -1,11 +1,35 @@
 //! The protocol engine of one module: events in (slot timer, RX, TX done, submit),
 //! actions out (load/abort mailboxes through `Controller`, deliver through `Host`,
-//! next timer deadline as the return value of `poll`). OWNER: lead.
+//! next timer deadline as the return value of `poll`).
+//!
+//! Time: every `now` is the node-local clock. The slot clock (`clock.rs`) maps it to
+//! bus time; laxities, deadlines and slot boundaries are bus time (docs/PROTOCOL.md §5).
+//!
+//! Per slot boundary the engine does O(1) work: advance the slot counters, look up its
+//! own calendar with a cursor, and either load the sync frame (master, slot 0), load an
+//! HRT fragment (own reserved slot), or open a free window and fill the mailboxes from
+//! the EDF queue (frames that fit before the window ends, docs/PROTOCOL.md §8).
+use crate::calendar::{free_run, CalendarCursor};
+use crate::clock::SlotClock;
 use crate::counters::Counters;
-use crate::driver::{Controller, Host, Mailbox, Token, TxResult};
+use crate::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult, MAILBOXES};
+use crate::fragment::{crc16, fragment_count, fragment_data, RxState, RxStep};
 use crate::frame::Frame;
+use crate::heartbeat::{heartbeat_frame, parse_heartbeat, Heartbeat};
+use crate::id::{CanId, Class, FIRST_TOPIC_MSG_ID, HEARTBEAT_BASE, LAXITY_HRT, LAXITY_NRT};
+use crate::queue::EdfQueue;
+use crate::sync::{parse_sync, sync_frame, Sync};
 use crate::tables::NodeTables;
-use crate::time::Nanos;
+use crate::time::{Nanos, SNanos};
+use crate::timing::{bits_to_ns, worst_case_bits};
+
+/// A slave that has not seen a sync frame for this many cycles stops transmitting
+/// and reports `Event::SyncLost` (its slot clock can no longer be trusted).
+pub const SYNC_LOSS_CYCLES: u64 = 4;
+/// Every module sends its heartbeat once every this many cycles (staggered by module).
+pub const HEARTBEAT_CYCLES: u64 = 10;
+/// Queue key of NRT messages: after every SRT deadline, FIFO among themselves.
+const NRT_KEY: u64 = u64::MAX;
 
 /// Why `Engine::submit` refused a message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -13,34 +37,523 @@ use crate::time::Nanos;
 pub enum SubmitError {
     /// The transmit queue is full (capacity `Q`).
     QueueFull,
-    /// `tx` is not a topic of this module, or it is HRT (HRT is sampled, not submitted).
+    /// `tx` is not a topic of this module, or it is HRT (HRT is sampled, not submitted),
+    /// or the payload length is not the topic's size.
     NotSubmittable,
+}
+
+/// SRT policy knobs, so the simulator can run the paper's published policy next to ours
+/// on the same engine (no protocol logic re-implemented elsewhere).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Policy {
+    /// Near a window end, load a shorter, less urgent frame that fits when the most
+    /// urgent one does not (false: strict EDF head, wait for the next window).
+    pub fit_window_end: bool,
+    /// Drop a message as soon as it can no longer make its deadline (remaining
+    /// fragments × worst-case frame time > laxity), instead of spending the bus on it.
+    pub drop_hopeless: bool,
+}
+
+impl Policy {
+    /// Our policy.
+    pub const OURS: Policy = Policy { fit_window_end: true, drop_hopeless: true };
+    /// The RTCAN paper's policy as published: EDF head only, drop only once the
+    /// deadline has passed.
+    pub const PAPER: Policy = Policy { fit_window_end: false, drop_hopeless: false };
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Item {
+    /// A topic message: `fragment` is the counter of the next frame to send.
+    Topic { tx: u8, token: Token, fragment: u8, crc: u16, deadline: Nanos },
+    /// This module's heartbeat.
+    Heartbeat,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Loaded {
+    Free,
+    Sync,
+    Hrt { tx: u8, token: Token, fragment: u8 },
+    /// Free-window frame; `latest_start` (local) is when it must be aborted if it has
+    /// not started, so it cannot overrun the next reserved slot.
+    Window { item: Item, key: u64, latest_start: Nanos, abort_requested: bool },
+}
+
+#[derive(Clone, Copy, Debug)]
+struct HrtTransfer {
+    tx: u8,
+    token: Token,
+    crc: u16,
 }
 
 /// Engine of one module. `RX`: receive topics; `ARENA`: reassembly bytes; `Q`: SRT/NRT
 /// queue capacity. All sizes come from the generated per-module constants.
 pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     tables: NodeTables<'t>,
+    policy: Policy,
     counters: Counters,
+    clock: SlotClock,
+    master: bool,
+    /// Worst-case duration of a frame with DLC 0..=8, ns (precomputed: no division on
+    /// the per-frame path).
+    wc_ns: [Nanos; 9],
+    slots_per_hyper: u32,
+    // Slot position of the boundary `next_boundary` (the next one to handle).
+    next_boundary: Nanos,
+    next_abs_cycle: u64,
+    next_slot: u8,
+    next_hyper_slot: u32,
+    cursor: CalendarCursor,
+    // The cycle being executed.
+    cycle_mask: u64,
+    /// Absolute cycle whose reservation mask `cycle_mask` is (u64::MAX: none).
+    mask_cycle: u64,
+    last_sync_cycle: u64,
+    /// Local time at which the current free window ends (guard applied); 0 = not in a window.
+    window_end: Nanos,
+    mailboxes: [Loaded; MAILBOXES],
+    hrt: Option<HrtTransfer>,
+    queue: EdfQueue<Item, Q>,
+    in_flight: usize,
+    heartbeat_pending: bool,
+    rx_state: [RxState; RX],
+    arena: [u8; ARENA],
 }
 
 impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARENA, Q> {
     /// A master if `tables.master_masks` is non-empty, else a slave waiting for sync.
+    /// `now` is the local time; a master starts cycle 0 one slot later.
     pub fn new(tables: NodeTables<'t>, now: Nanos) -> Self {
-        let _ = now;
-        Engine { tables, counters: Counters::default() }
+        let bus = tables.bus;
+        let master = !tables.master_masks.is_empty();
+        let start = now + bus.slot_ns;
+        let clock = if master { SlotClock::master(&bus, start) } else { SlotClock::slave(&bus) };
+        let mut wc_ns = [0; 9];
+        let mut dlc = 0;
+        while dlc < 9 {
+            if let Some(w) = wc_ns.get_mut(dlc) {
+                *w = bits_to_ns(worst_case_bits(dlc as u8), bus.bitrate);
+            }
+            dlc += 1;
+        }
+        Engine {
+            tables,
+            policy: Policy::OURS,
+            counters: Counters::default(),
+            clock,
+            master,
+            wc_ns,
+            slots_per_hyper: bus.hyperperiod_cycles.saturating_mul(bus.slots_per_cycle as u32).max(1),
+            next_boundary: if master { start } else { Nanos::MAX },
+            next_abs_cycle: 0,
+            next_slot: 0,
+            next_hyper_slot: 0,
+            cursor: CalendarCursor::default(),
+            cycle_mask: 0,
+            mask_cycle: u64::MAX,
+            last_sync_cycle: 0,
+            window_end: 0,
+            mailboxes: [Loaded::Free; MAILBOXES],
+            hrt: None,
+            queue: EdfQueue::new(),
+            in_flight: 0,
+            heartbeat_pending: false,
+            rx_state: [RxState::default(); RX],
+            arena: [0; ARENA],
+        }
     }
+
+    /// Selects the SRT policy (default `Policy::OURS`).
+    pub fn set_policy(&mut self, policy: Policy) {
+        self.policy = policy;
+    }
+
+    /// Counters.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// True on the master, and on a slave while it follows the master's sync.
+    pub fn is_synced(&self) -> bool {
+        self.master || (self.clock.is_locked() && self.next_boundary != Nanos::MAX)
+    }
+
+    /// The slot clock (bus time of a local instant: `clock().to_bus(now)`).
+    pub fn clock(&self) -> &SlotClock {
+        &self.clock
+    }
+
+    /// Messages waiting in the SRT/NRT queue (not counting frames in mailboxes).
+    pub fn queued(&self) -> usize {
+        self.queue.len()
+    }
+
     /// Does everything due at local time `now` (slot boundaries, window closes) and
     /// returns the local time at which it must be called next.
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
-        let _ = (now, can, host, &self.tables);
-        todo!()
+        self.abort_overdue(now, can);
+        if !self.master && !self.is_synced() {
+            return Nanos::MAX;
+        }
+        let slot_ns = self.tables.bus.slot_ns;
+        while self.next_boundary <= now {
+            // A boundary whose successor has also passed was missed (handler too late):
+            // skip it rather than transmit into someone else's slot.
+            let late = self.next_boundary.saturating_add(slot_ns) <= now;
+            self.slot_boundary(now, late, can, host);
+            if !self.is_synced() {
+                return Nanos::MAX;
+            }
+        }
+        self.next_wakeup()
     }
+
+    /// The local time `poll` must run next (slot boundary or a window-close abort).
+    pub fn next_wakeup(&self) -> Nanos {
+        let mut next = self.next_boundary;
+        for mb in self.mailboxes.iter() {
+            if let Loaded::Window { latest_start, abort_requested: false, .. } = *mb {
+                next = next.min(latest_start);
+            }
+        }
+        next
+    }
+
+    fn abort_overdue(&mut self, now: Nanos, can: &mut impl Controller) {
+        for (i, mb) in self.mailboxes.iter_mut().enumerate() {
+            if let Loaded::Window { latest_start, abort_requested, .. } = mb {
+                if !*abort_requested && *latest_start <= now {
+                    *abort_requested = true;
+                    can.abort(Mailbox(i as u8));
+                }
+            }
+        }
+    }
+
+    /// Handles the boundary `self.next_boundary` and advances to the next one.
+    fn slot_boundary(&mut self, now: Nanos, late: bool, can: &mut impl Controller, host: &mut impl Host) {
+        let slot = self.next_slot;
+        let hyper_slot = self.next_hyper_slot;
+        let abs_cycle = self.next_abs_cycle;
+        let spc = self.tables.bus.slots_per_cycle;
+        // Advance first: whatever happens below, the next boundary is the next slot.
+        if slot + 1 >= spc {
+            self.next_slot = 0;
+            self.next_abs_cycle = abs_cycle + 1;
+        } else {
+            self.next_slot = slot + 1;
+        }
+        self.next_hyper_slot = if hyper_slot + 1 >= self.slots_per_hyper { 0 } else { hyper_slot + 1 };
+        let next_bus = (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
+        self.next_boundary = self.clock.to_local(next_bus);
+        self.window_end = 0;
+
+        let own = self.cursor.take(self.tables.calendar, hyper_slot).copied();
+        if slot == 0 {
+            self.start_cycle(abs_cycle, late, can, host);
+            return;
+        }
+        if late {
+            if let Some(entry) = own {
+                Counters::bump(&mut self.counters.hrt_late);
+                self.abandon_hrt(entry.tx, host);
+            }
+            return;
+        }
+        if let Some(entry) = own {
+            self.load_hrt(entry.tx, entry.fragment, can, host);
+            return;
+        }
+        if self.mask_cycle != abs_cycle || self.cycle_mask & (1u64 << slot) != 0 {
+            // Reserved by another module, or this cycle's mask is unknown (no sync yet):
+            // stay silent.
+            return;
+        }
+        let run = free_run(self.cycle_mask, slot, spc) as u64;
+        let end_bus = (abs_cycle * spc as u64 + slot as u64 + run) * self.tables.bus.slot_ns;
+        self.window_end = self.clock.to_local(end_bus).saturating_sub(self.tables.bus.guard_ns);
+        self.refill(now, can, host);
+    }
+
+    fn start_cycle(&mut self, abs_cycle: u64, late: bool, can: &mut impl Controller, host: &mut impl Host) {
+        let bus = self.tables.bus;
+        if self.master {
+            let hyper = bus.hyperperiod_cycles.max(1) as u64;
+            let idx = (abs_cycle % hyper) as usize;
+            self.cycle_mask = self.tables.master_masks.get(idx).copied().unwrap_or(u64::MAX) | 1;
+            self.mask_cycle = abs_cycle;
+            let wrap = bus.cycle_counter_wrap.max(1) as u64;
+            let cycle = (abs_cycle % wrap) as u16;
+            if !late {
+                let frame = sync_frame(Sync { cycle, mask: self.cycle_mask }, bus.slots_per_cycle);
+                self.load_any(Loaded::Sync, &frame, can);
+            }
+        } else {
+            // The mask of this cycle arrives with its sync frame (during slot 0).
+            if abs_cycle > self.last_sync_cycle + 1 {
+                Counters::bump(&mut self.counters.sync_missed);
+            }
+            if abs_cycle >= self.last_sync_cycle + SYNC_LOSS_CYCLES {
+                // The slot clock can no longer be trusted: stop transmitting until the
+                // next sync frame restarts the slot sequence.
+                self.next_boundary = Nanos::MAX;
+                self.window_end = 0;
+                host.event(Event::SyncLost);
+                return;
+            }
+        }
+        if (abs_cycle + self.tables.module as u64).is_multiple_of(HEARTBEAT_CYCLES) {
+            self.heartbeat_pending = true;
+        }
+    }
+
+    fn load_any(&mut self, what: Loaded, frame: &Frame, can: &mut impl Controller) -> bool {
+        for (i, mb) in self.mailboxes.iter_mut().enumerate() {
+            if *mb == Loaded::Free {
+                *mb = what;
+                can.load(Mailbox(i as u8), frame);
+                return true;
+            }
+        }
+        false
+    }
+
+    fn abandon_hrt(&mut self, tx: u8, host: &mut impl Host) {
+        if let Some(x) = self.hrt.take() {
+            if x.tx == tx {
+                host.tx_done(x.tx, Some(x.token), TxOutcome::DeadlineMissed);
+            } else {
+                self.hrt = Some(x);
+            }
+        }
+    }
+
+    fn load_hrt(&mut self, tx: u8, fragment: u8, can: &mut impl Controller, host: &mut impl Host) {
+        let Some(topic) = self.tables.tx.get(tx as usize).copied() else { return };
+        let count = fragment_count(topic.size as usize);
+        if fragment + 1 == count {
+            // First fragment: sample the latest value and latch it for the whole transfer.
+            if let Some(stale) = self.hrt.take() {
+                host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
+            }
+            match host.hrt_sample(tx) {
+                Some(token) => {
+                    let payload = host.payload(token);
+                    let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
+                    self.hrt = Some(HrtTransfer { tx, token, crc });
+                }
+                None => {
+                    Counters::bump(&mut self.counters.hrt_empty);
+                    host.tx_done(tx, None, TxOutcome::NothingToSend);
+                    return;
+                }
+            }
+        }
+        let Some(x) = self.hrt.filter(|x| x.tx == tx) else { return };
+        let mut data = [0u8; 8];
+        let dlc = fragment_data(host.payload(x.token), x.crc, fragment, &mut data);
+        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else { return };
+        let Some(frame) = Frame::from_parts(id, dlc, data) else { return };
+        if !self.load_any(Loaded::Hrt { tx, token: x.token, fragment }, &frame, can) {
+            Counters::bump(&mut self.counters.hrt_late);
+            self.abandon_hrt(tx, host);
+        }
+    }
+
+    /// Fills free mailboxes with window frames that can finish before the window ends.
+    fn refill(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) {
+        if self.window_end <= now {
+            return;
+        }
+        let now_bus = self.clock.to_bus(now);
+        let remaining = self.window_end - now;
+        while let Some(free) = self.mailboxes.iter().position(|m| *m == Loaded::Free) {
+            let Some((key, item)) = self.pick(now_bus, remaining, host) else { break };
+            let (frame, dlc) = match item {
+                Item::Heartbeat => {
+                    let hb = Heartbeat {
+                        module: self.tables.module,
+                        state: host.module_state(),
+                        fingerprint: self.tables.bus.fingerprint,
+                    };
+                    match heartbeat_frame(hb) {
+                        Some(f) => (f, f.dlc()),
+                        None => continue,
+                    }
+                }
+                Item::Topic { tx, token, fragment, crc, deadline } => {
+                    let Some(topic) = self.tables.tx.get(tx as usize) else { continue };
+                    let laxity = if key == NRT_KEY {
+                        LAXITY_NRT
+                    } else {
+                        let lax = deadline as SNanos - now_bus as SNanos;
+                        match self.tables.bus.laxity.encode(lax) {
+                            Some(code) => code,
+                            None => {
+                                self.drop_missed(tx, token, host);
+                                continue;
+                            }
+                        }
+                    };
+                    let mut data = [0u8; 8];
+                    let dlc = fragment_data(host.payload(token), crc, fragment, &mut data);
+                    let Some(id) = CanId::new(laxity, topic.msg_id, fragment) else { continue };
+                    match Frame::from_parts(id, dlc, data) {
+                        Some(f) => (f, dlc),
+                        None => continue,
+                    }
+                }
+            };
+            let wc = self.wc(dlc);
+            let latest_start = self.window_end.saturating_sub(wc);
+            if let Some(mb) = self.mailboxes.get_mut(free) {
+                *mb = Loaded::Window { item, key, latest_start, abort_requested: false };
+            }
+            self.in_flight += 1;
+            can.load(Mailbox(free as u8), &frame);
+        }
+    }
+
+    /// The next window item: the EDF head if it fits the remaining window time, else
+    /// (policy permitting) the most urgent one that fits; drops hopeless messages.
+    fn pick(&mut self, now_bus: Nanos, remaining: Nanos, host: &mut impl Host) -> Option<(u64, Item)> {
+        let wc8 = self.wc(8);
+        while let Some((key, head)) = self.queue.peek().map(|(k, i)| (k, *i)) {
+            if let Item::Topic { tx, token, fragment, deadline, .. } = head {
+                // Hopeless: even sent back to back from now, the remaining fragments
+                // cannot all finish before the deadline.
+                let need = (fragment as Nanos + 1) * wc8;
+                if key != NRT_KEY
+                    && (deadline < now_bus || (self.policy.drop_hopeless && deadline - now_bus < need))
+                {
+                    self.queue.pop();
+                    self.drop_missed(tx, token, host);
+                    continue;
+                }
+            }
+            if self.item_wc(&head) <= remaining {
+                return self.queue.pop();
+            }
+            break;
+        }
+        if self.policy.fit_window_end {
+            let wc = self.wc_ns;
+            let tables = self.tables;
+            if let Some(found) = self.queue.pop_first_matching(|_, item| {
+                item_dlc(item, &tables).and_then(|d| wc.get(d as usize)).is_some_and(|w| *w <= remaining)
+            }) {
+                return Some(found);
+            }
+        }
+        if self.heartbeat_pending && self.wc(5) <= remaining {
+            self.heartbeat_pending = false;
+            return Some((NRT_KEY, Item::Heartbeat));
+        }
+        None
+    }
+
+    fn item_wc(&self, item: &Item) -> Nanos {
+        item_dlc(item, &self.tables).map_or(Nanos::MAX, |d| self.wc(d))
+    }
+
+    /// Worst-case duration of a frame with `dlc` data bytes.
+    fn wc(&self, dlc: u8) -> Nanos {
+        self.wc_ns.get(dlc as usize).copied().unwrap_or(Nanos::MAX)
+    }
+
+    fn drop_missed(&mut self, tx: u8, token: Token, host: &mut impl Host) {
+        Counters::bump(&mut self.counters.deadline_missed);
+        host.tx_done(tx, Some(token), TxOutcome::DeadlineMissed);
+    }
+
     /// A frame passed the filters; `sof` is its start-of-frame local timestamp.
     pub fn on_rx(&mut self, frame: &Frame, sof: Nanos, can: &mut impl Controller, host: &mut impl Host) {
-        let _ = (frame, sof, can, host);
-        todo!()
+        let id = frame.id();
+        if id.is_sync() {
+            self.on_sync(frame, sof, host);
+            return;
+        }
+        let msg = id.msg_id().0;
+        if (HEARTBEAT_BASE..FIRST_TOPIC_MSG_ID).contains(&msg) {
+            match parse_heartbeat(frame) {
+                Some(hb) if hb.fingerprint != self.tables.bus.fingerprint => host.event(Event::FingerprintMismatch {
+                    module: hb.module,
+                    fingerprint: hb.fingerprint,
+                }),
+                Some(hb) => host.event(Event::Heartbeat { module: hb.module, state: hb.state }),
+                None => Counters::bump(&mut self.counters.rx_bad_heartbeat),
+            }
+            return;
+        }
+        let Ok(idx) = self.tables.rx.binary_search_by_key(&id.msg_id(), |t| t.msg_id) else {
+            Counters::bump(&mut self.counters.rx_unknown_id);
+            return;
+        };
+        let (Some(topic), Some(state)) = (self.tables.rx.get(idx), self.rx_state.get_mut(idx)) else {
+            Counters::bump(&mut self.counters.rx_unknown_id);
+            return;
+        };
+        let start = topic.arena_offset as usize;
+        let Some(buf) = self.arena.get_mut(start..) else {
+            Counters::bump(&mut self.counters.rx_unknown_id);
+            return;
+        };
+        match state.step(buf, topic.size as usize, frame, sof) {
+            RxStep::Pending => {}
+            RxStep::Restarted => Counters::bump(&mut self.counters.rx_incomplete),
+            RxStep::Complete(payload, first_sof) => {
+                Counters::bump(&mut self.counters.rx_delivered);
+                host.deliver(idx as u8, payload, first_sof);
+            }
+            RxStep::Dropped(why) => Counters::bump(match why {
+                crate::fragment::RxDrop::BadDlc => &mut self.counters.rx_bad_dlc,
+                crate::fragment::RxDrop::OutOfOrder => &mut self.counters.rx_out_of_order,
+                crate::fragment::RxDrop::Crc => &mut self.counters.rx_crc,
+                crate::fragment::RxDrop::BadSize => &mut self.counters.rx_bad_size,
+            }),
+        }
+        let _ = can;
     }
+
+    fn on_sync(&mut self, frame: &Frame, sof: Nanos, host: &mut impl Host) {
+        let spc = self.tables.bus.slots_per_cycle;
+        let Some(sync) = parse_sync(frame, spc) else {
+            Counters::bump(&mut self.counters.rx_bad_sync);
+            return;
+        };
+        if self.master {
+            // Another node claims mastership: count it, keep our own clock.
+            Counters::bump(&mut self.counters.rx_bad_sync);
+            return;
+        }
+        let was_synced = self.is_synced();
+        if !self.clock.on_sync(sof, sync.cycle) {
+            return;
+        }
+        let cycle_ns = self.tables.bus.cycle_ns().max(1);
+        let abs_cycle = self.clock.to_bus(sof).saturating_add(cycle_ns / 2) / cycle_ns;
+        self.last_sync_cycle = abs_cycle;
+        self.cycle_mask = sync.mask;
+        self.mask_cycle = abs_cycle;
+        let hyper = self.tables.bus.hyperperiod_cycles.max(1) as u64;
+        let ahead = abs_cycle > self.next_abs_cycle || (abs_cycle == self.next_abs_cycle && self.next_slot == 0);
+        if !was_synced || ahead {
+            // (Re)start the slot sequence at slot 1 of this cycle: first lock, or the sync
+            // came before this node's own slot-0 boundary (its clock ran slow).
+            self.next_abs_cycle = abs_cycle;
+            self.next_slot = 1;
+            self.next_hyper_slot = ((abs_cycle % hyper) * spc as u64 + 1) as u32;
+            self.cursor = CalendarCursor::default();
+        }
+        let next_bus = (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
+        self.next_boundary = self.clock.to_local(next_bus);
+        if !was_synced {
+            host.event(Event::Synced);
+        }
+    }
+
     /// Mailbox `mailbox` finished with `result` at local time `now`.
     pub fn on_tx_done(
         &mut self,
@@ -50,9 +563,47 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
-        let _ = (mailbox, result, now, can, host);
-        todo!()
+        let Some(slot) = self.mailboxes.get_mut(mailbox.0 as usize) else { return };
+        let what = core::mem::replace(slot, Loaded::Free);
+        match result {
+            TxResult::Sent => Counters::bump(&mut self.counters.tx_frames),
+            TxResult::Aborted => Counters::bump(&mut self.counters.tx_aborted),
+            TxResult::Failed => Counters::bump(&mut self.counters.tx_failed),
+        }
+        match what {
+            Loaded::Free | Loaded::Sync => {}
+            Loaded::Hrt { tx, token, fragment } => match result {
+                TxResult::Sent if fragment == 0 => {
+                    self.hrt = None;
+                    host.tx_done(tx, Some(token), TxOutcome::Sent);
+                }
+                TxResult::Sent => {}
+                _ => self.abandon_hrt(tx, host),
+            },
+            Loaded::Window { item, key, .. } => {
+                self.in_flight = self.in_flight.saturating_sub(1);
+                match (item, result) {
+                    (Item::Heartbeat, TxResult::Sent) => {}
+                    (Item::Heartbeat, _) => self.heartbeat_pending = true,
+                    (Item::Topic { tx, token, fragment: 0, .. }, TxResult::Sent) => {
+                        host.tx_done(tx, Some(token), TxOutcome::Sent);
+                    }
+                    (Item::Topic { tx, token, fragment, crc, deadline }, r) => {
+                        // Next fragment after a success; the same one again after an abort
+                        // or a lost arbitration. Laxity is re-encoded when it is loaded.
+                        let fragment = if r == TxResult::Sent { fragment - 1 } else { fragment };
+                        let next = Item::Topic { tx, token, fragment, crc, deadline };
+                        if self.queue.push(key, next).is_err() {
+                            // Cannot happen: submit keeps room for every frame in flight.
+                            self.drop_missed(tx, token, host);
+                        }
+                    }
+                }
+            }
+        }
+        self.refill(now, can, host);
     }
+
     /// Queues an SRT/NRT message of topic `tx` (deadline = now + topic deadline).
     pub fn submit(
         &mut self,
@@ -62,19 +613,52 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) -> Result<(), SubmitError> {
-        let _ = (now, tx, token, can, host);
-        todo!()
+        let topic = self.tables.tx.get(tx as usize).ok_or(SubmitError::NotSubmittable)?;
+        let payload = host.payload(token);
+        if topic.class == Class::Hrt || payload.len() != topic.size as usize {
+            return Err(SubmitError::NotSubmittable);
+        }
+        if self.queue.len() + self.in_flight >= Q {
+            Counters::bump(&mut self.counters.queue_full);
+            return Err(SubmitError::QueueFull);
+        }
+        let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
+        let fragment = fragment_count(payload.len()).saturating_sub(1);
+        let (key, deadline) = match topic.class {
+            Class::Srt => {
+                let d = self.clock.to_bus(now).saturating_add(topic.deadline_ns);
+                (d, d)
+            }
+            _ => (NRT_KEY, NRT_KEY),
+        };
+        self.queue
+            .push(key, Item::Topic { tx, token, fragment, crc, deadline })
+            .map_err(|_| SubmitError::QueueFull)?;
+        self.refill(now, can, host);
+        Ok(())
     }
+
     /// The driver saw an RX FIFO overrun.
     pub fn on_rx_overrun(&mut self) {
         Counters::bump(&mut self.counters.rx_overrun);
     }
+
     /// The driver saw bus-off.
     pub fn on_bus_off(&mut self) {
         Counters::bump(&mut self.counters.bus_off);
     }
-    /// Counters.
-    pub fn counters(&self) -> &Counters {
-        &self.counters
+}
+
+/// DLC of the next frame of a queued item.
+fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
+    match *item {
+        Item::Heartbeat => Some(5),
+        Item::Topic { tx, fragment, .. } => {
+            let size = tables.tx.get(tx as usize)?.size as usize;
+            let wire = crate::fragment::wire_len(size);
+            let count = fragment_count(size) as usize;
+            let index = count.checked_sub(fragment as usize + 1)?;
+            Some(wire.saturating_sub(index * 8).min(8) as u8)
+        }
     }
 }

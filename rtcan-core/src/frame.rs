@@ -19,6 +19,8 @@ impl Frame {
         Some(Frame { id, dlc: data.len() as u8, data: buf })
     }
     /// `None` if `dlc > 8`. Bytes past `dlc` are zeroed.
+    // `i < 8` is the loop bound: the index cannot panic (const fn cannot use get_mut).
+    #[allow(clippy::indexing_slicing)]
     pub const fn from_parts(id: CanId, dlc: u8, mut data: [u8; 8]) -> Option<Self> {
         if dlc > 8 {
             return None;

@@ -1,1 +1,13 @@
-//! Simulator.
+//! Deterministic discrete-event simulator of robots on a CAN bus: every simulated module
+//! runs the same `rtcan_core::Engine` (and middleware) as its firmware, through the
+//! same driver boundary (`rtcan_core::Controller`), on a bit-accurate bus.
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic))]
+
+pub mod bus;
+pub mod clock;
+pub mod controller;
+pub mod rng;
+
+pub use bus::{Bus, Module, NodeSetup, WireFrame};
+pub use clock::NodeClock;
+pub use controller::{Filter, SimController};

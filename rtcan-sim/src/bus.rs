@@ -1,0 +1,437 @@
+//! The discrete-event CAN bus: global time in ns, one event queue, arbitration, frame
+//! timing from the real bits, receive FIFOs, interrupt latency, bit errors.
+//!
+//! What is modelled, and how:
+//! - A node that has a pending frame when the bus is idle starts a start-of-frame; every
+//!   node whose mailbox is loaded within that first bit time joins the arbitration (a
+//!   node loading later sees the SOF and waits). Lowest raw identifier wins; each
+//!   controller offers only its own best mailbox. Losers retry when the bus is next idle
+//!   (with NART they fail at once).
+//! - Duration = `rtcan_core::timing::exact_bits` (stuffing on the actual ID, DLC, data
+//!   and CRC-15), EOF included; receivers and the transmitter see the frame complete at
+//!   the end of EOF, the bus takes new SOFs after the 3-bit intermission.
+//! - Bit errors (optional, `bit_error_rate` per bit): the frame is hit at a uniformly
+//!   drawn bit after the SOF; an error flag (6 bits) and delimiter (8 bits) follow, then
+//!   the intermission. Receivers drop the frame, the transmitter retransmits (or fails
+//!   with NART; or ends aborted if an abort was requested meanwhile). Error counters
+//!   and bus-off are not modelled.
+//! - Receive and transmit interrupts, and timer wake-ups, run `irq_latency_ns` after the
+//!   hardware event. Start-of-frame timestamps are taken by hardware, without latency,
+//!   in the receiver's local clock.
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use rtcan_core::driver::{Mailbox, TxResult};
+use rtcan_core::timing::{bits_to_ns, exact_bits, INTERMISSION_BITS};
+use rtcan_core::{Frame, Nanos};
+
+use crate::clock::NodeClock;
+use crate::controller::{Filter, SimController, RX_FIFO_DEPTH};
+use crate::rng::Rng;
+
+/// Error flag plus error delimiter, in bits.
+pub const ERROR_FRAME_BITS: u32 = 6 + 8;
+
+/// What a simulated module does with the driver events of its controller. Every
+/// callback gets the local time and returns the local time of the next timer wake-up
+/// it wants (`None`: no timer armed). A module is typically an `rtcan_core::Engine`
+/// plus a `Host`.
+pub trait Module {
+    /// Power-on.
+    fn start(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos>;
+    /// The timer fired.
+    fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos>;
+    /// The receive interrupt read `frame` from a FIFO; `sof` is its hardware timestamp.
+    fn rx(&mut self, frame: &Frame, sof: Nanos, now: Nanos, can: &mut SimController) -> Option<Nanos>;
+    /// The transmit interrupt reported `mailbox` done.
+    fn tx_done(&mut self, mailbox: Mailbox, result: TxResult, now: Nanos, can: &mut SimController) -> Option<Nanos>;
+    /// A receive FIFO overran.
+    fn rx_overrun(&mut self, now: Nanos);
+}
+
+/// Physical parameters of one node.
+#[derive(Clone, Debug)]
+pub struct NodeSetup {
+    /// Local clock.
+    pub clock: NodeClock,
+    /// Interrupt latency (RX, TX and timer), ns.
+    pub irq_latency_ns: Nanos,
+    /// No automatic retransmission.
+    pub nart: bool,
+    /// Acceptance filters.
+    pub filter: Filter,
+}
+
+impl Default for NodeSetup {
+    fn default() -> Self {
+        NodeSetup { clock: NodeClock::default(), irq_latency_ns: 0, nart: false, filter: Filter::AcceptAll }
+    }
+}
+
+/// One frame as it happened on the wire (global times).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WireFrame {
+    /// Start of frame.
+    pub sof: Nanos,
+    /// End of EOF (or of the error delimiter).
+    pub end: Nanos,
+    /// Transmitting node.
+    pub node: usize,
+    /// The frame.
+    pub frame: Frame,
+    /// False when destroyed by an error frame.
+    pub ok: bool,
+}
+
+/// Bus-wide counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BusStats {
+    /// Frames completed.
+    pub frames_ok: u64,
+    /// Frames destroyed by a bit error.
+    pub error_frames: u64,
+    /// Arbitrations between several controllers.
+    pub contended: u64,
+    /// Two controllers sent the same identifier at once (a design error on a real bus).
+    pub id_collisions: u64,
+    /// Time the bus was not idle (frames, error frames, intermissions), ns.
+    pub busy_ns: Nanos,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Ev {
+    Wake { node: usize, gen: u64 },
+    ArbDecide,
+    FrameEnd,
+    Idle,
+    RxIrq { node: usize, fifo: usize },
+    TxIrq { node: usize, mb: u8, result: u8 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    Idle,
+    Arbitrating { sof: Nanos },
+    Busy { node: usize, mb: usize, sof: Nanos, frame: Frame, ok: bool },
+}
+
+struct Node<M> {
+    module: M,
+    can: SimController,
+    setup: NodeSetup,
+    wake_gen: u64,
+}
+
+/// The simulated bus with its nodes.
+pub struct Bus<M: Module> {
+    bitrate: u32,
+    bit_error_rate: f64,
+    nodes: Vec<Node<M>>,
+    queue: BinaryHeap<Reverse<(Nanos, u64, Ev)>>,
+    seq: u64,
+    state: State,
+    now: Nanos,
+    rng: Rng,
+    started: bool,
+    /// Completed and destroyed frames, in order, when `record_wire` is set.
+    pub wire: Vec<WireFrame>,
+    /// Keep `wire` (off for long sweeps that only need counters).
+    pub record_wire: bool,
+    /// Counters.
+    pub stats: BusStats,
+}
+
+fn result_code(r: TxResult) -> u8 {
+    match r {
+        TxResult::Sent => 0,
+        TxResult::Aborted => 1,
+        TxResult::Failed => 2,
+    }
+}
+
+fn code_result(c: u8) -> TxResult {
+    match c {
+        0 => TxResult::Sent,
+        1 => TxResult::Aborted,
+        _ => TxResult::Failed,
+    }
+}
+
+impl<M: Module> Bus<M> {
+    /// A bus at `bitrate` bit/s; `bit_error_rate` per bit (0 = error free); `seed` for
+    /// the error draws.
+    pub fn new(bitrate: u32, bit_error_rate: f64, seed: u64) -> Self {
+        Bus {
+            bitrate: bitrate.max(1),
+            bit_error_rate,
+            nodes: Vec::new(),
+            queue: BinaryHeap::new(),
+            seq: 0,
+            state: State::Idle,
+            now: 0,
+            rng: Rng::new(seed, 0xB05),
+            started: false,
+            wire: Vec::new(),
+            record_wire: true,
+            stats: BusStats::default(),
+        }
+    }
+
+    /// Attaches a node; returns its index.
+    pub fn add_node(&mut self, module: M, setup: NodeSetup) -> usize {
+        let can = SimController::new(setup.nart, setup.filter.clone());
+        self.nodes.push(Node { module, can, setup, wake_gen: 0 });
+        self.nodes.len() - 1
+    }
+
+    /// Current global time.
+    pub fn now(&self) -> Nanos {
+        self.now
+    }
+
+    /// Bit time in ns (rounded up).
+    pub fn bit_ns(&self) -> Nanos {
+        bits_to_ns(1, self.bitrate)
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True without nodes.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Module of node `i`.
+    pub fn module(&self, i: usize) -> Option<&M> {
+        self.nodes.get(i).map(|n| &n.module)
+    }
+
+    /// Module of node `i`, mutably.
+    pub fn module_mut(&mut self, i: usize) -> Option<&mut M> {
+        self.nodes.get_mut(i).map(|n| &mut n.module)
+    }
+
+    /// Controller of node `i`.
+    pub fn controller(&self, i: usize) -> Option<&SimController> {
+        self.nodes.get(i).map(|n| &n.can)
+    }
+
+    /// Clock of node `i`.
+    pub fn clock(&self, i: usize) -> Option<NodeClock> {
+        self.nodes.get(i).map(|n| n.setup.clock)
+    }
+
+    /// Runs an arbitrary action on node `i` at the current time, as if from its own
+    /// code (e.g. a test loading a mailbox), with the usual bookkeeping afterwards.
+    pub fn with_node(&mut self, i: usize, f: impl FnOnce(&mut M, Nanos, &mut SimController) -> Option<Nanos>) {
+        self.callback(i, f);
+    }
+
+    fn push(&mut self, t: Nanos, ev: Ev) {
+        self.seq += 1;
+        self.queue.push(Reverse((t, self.seq, ev)));
+    }
+
+    fn callback(&mut self, i: usize, f: impl FnOnce(&mut M, Nanos, &mut SimController) -> Option<Nanos>) {
+        let now = self.now;
+        let Some(node) = self.nodes.get_mut(i) else { return };
+        node.can.now = now;
+        let local = node.setup.clock.local(now);
+        let next = f(&mut node.module, local, &mut node.can);
+        let lat = node.setup.irq_latency_ns;
+        node.wake_gen += 1;
+        let gen = node.wake_gen;
+        let wake_at = next.map(|l| node.setup.clock.global_at(l).saturating_add(lat).max(now));
+        let reports = std::mem::take(&mut node.can.reports);
+        if let Some(t) = wake_at {
+            self.push(t, Ev::Wake { node: i, gen });
+        }
+        for (mb, r) in reports {
+            self.push(now + lat, Ev::TxIrq { node: i, mb: mb.0, result: result_code(r) });
+        }
+        self.maybe_start_arbitration();
+    }
+
+    fn maybe_start_arbitration(&mut self) {
+        if self.state == State::Idle && self.nodes.iter().any(|n| n.can.has_pending()) {
+            self.state = State::Arbitrating { sof: self.now };
+            let t = self.now + self.bit_ns();
+            self.push(t, Ev::ArbDecide);
+        }
+    }
+
+    fn start(&mut self) {
+        self.started = true;
+        for i in 0..self.nodes.len() {
+            self.callback(i, |m, now, can| m.start(now, can));
+        }
+    }
+
+    /// Runs every event up to and including global time `until`.
+    pub fn run_until(&mut self, until: Nanos) {
+        if !self.started {
+            self.start();
+        }
+        while let Some(Reverse((t, _, ev))) = self.queue.peek().copied() {
+            if t > until {
+                break;
+            }
+            self.queue.pop();
+            self.now = t;
+            self.handle(ev);
+        }
+        self.now = self.now.max(until);
+    }
+
+    fn handle(&mut self, ev: Ev) {
+        match ev {
+            Ev::Wake { node, gen } => {
+                if self.nodes.get(node).is_some_and(|n| n.wake_gen == gen) {
+                    self.callback(node, |m, now, can| m.wake(now, can));
+                }
+            }
+            Ev::ArbDecide => self.arbitrate(),
+            Ev::FrameEnd => self.frame_end(),
+            Ev::Idle => {
+                self.state = State::Idle;
+                self.maybe_start_arbitration();
+            }
+            Ev::RxIrq { node, fifo } => self.rx_irq(node, fifo),
+            Ev::TxIrq { node, mb, result } => {
+                self.callback(node, |m, now, can| m.tx_done(Mailbox(mb), code_result(result), now, can));
+            }
+        }
+    }
+
+    fn arbitrate(&mut self) {
+        let State::Arbitrating { sof } = self.state else { return };
+        let offers: Vec<(u32, usize, usize)> = self
+            .nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(n, node)| node.can.best_pending().map(|(mb, p)| (p.frame.id().raw(), n, mb)))
+            .collect();
+        let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
+            // Everything was aborted during the SOF bit.
+            self.state = State::Idle;
+            return;
+        };
+        if offers.len() > 1 {
+            self.stats.contended += 1;
+        }
+        if offers.iter().filter(|o| o.0 == win_id).count() > 1 {
+            self.stats.id_collisions += 1;
+        }
+        let lat_now = self.now;
+        for &(_, n, mb) in offers.iter().filter(|o| o.1 != win_node) {
+            let Some(node) = self.nodes.get_mut(n) else { continue };
+            if node.can.nart {
+                node.can.take_mailbox(mb);
+                node.can.stats.tx_failed += 1;
+                let t = lat_now + node.setup.irq_latency_ns;
+                self.push(t, Ev::TxIrq { node: n, mb: mb as u8, result: result_code(TxResult::Failed) });
+            }
+        }
+        let Some(node) = self.nodes.get_mut(win_node) else { return };
+        let Some(p) = node.can.mailbox(win_mb) else { return };
+        node.can.on_wire = Some(win_mb);
+        let bits = exact_bits(&p.frame);
+        let body = bits - INTERMISSION_BITS;
+        let mut ok = true;
+        let mut end_bits = body;
+        if self.bit_error_rate > 0.0 {
+            let p_err = 1.0 - (1.0 - self.bit_error_rate).powi(body as i32);
+            if self.rng.unit() < p_err {
+                ok = false;
+                let k = self.rng.range(1, u64::from(body - 1)) as u32;
+                end_bits = k + ERROR_FRAME_BITS;
+            }
+        }
+        self.state = State::Busy { node: win_node, mb: win_mb, sof, frame: p.frame, ok };
+        let t = sof + bits_to_ns(end_bits, self.bitrate);
+        self.push(t, Ev::FrameEnd);
+    }
+
+    fn frame_end(&mut self) {
+        let State::Busy { node: tx, mb, sof, frame, ok } = self.state else { return };
+        let now = self.now;
+        let ifs = bits_to_ns(INTERMISSION_BITS, self.bitrate);
+        self.stats.busy_ns += now - sof + ifs;
+        if self.record_wire {
+            self.wire.push(WireFrame { sof, end: now, node: tx, frame, ok });
+        }
+        let mut irqs = Vec::new();
+        if let Some(node) = self.nodes.get_mut(tx) {
+            node.can.on_wire = None;
+            let lat = now + node.setup.irq_latency_ns;
+            let aborting = node.can.abort_requested.get(mb).copied().unwrap_or(false);
+            let result = if ok {
+                node.can.stats.tx_ok += 1;
+                Some(TxResult::Sent)
+            } else if node.can.nart {
+                node.can.stats.tx_failed += 1;
+                Some(TxResult::Failed)
+            } else if aborting {
+                node.can.stats.aborted += 1;
+                Some(TxResult::Aborted)
+            } else {
+                None // automatic retransmission
+            };
+            if let Some(r) = result {
+                node.can.take_mailbox(mb);
+                irqs.push((lat, Ev::TxIrq { node: tx, mb: mb as u8, result: result_code(r) }));
+            }
+        }
+        if ok {
+            self.stats.frames_ok += 1;
+            let mut overruns = Vec::new();
+            for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
+                let Some(fifo) = node.can.filter.fifo_for(frame.id().raw()) else { continue };
+                let (Some(q), Some(pending)) = (node.can.fifos.get_mut(fifo), node.can.rx_irq_pending.get_mut(fifo))
+                else {
+                    continue;
+                };
+                if q.len() >= RX_FIFO_DEPTH {
+                    if let Some(c) = node.can.stats.rx_overrun.get_mut(fifo) {
+                        *c += 1;
+                    }
+                    overruns.push(n);
+                    continue;
+                }
+                q.push_back((frame, node.setup.clock.local(sof)));
+                node.can.stats.rx_frames += 1;
+                if !*pending {
+                    *pending = true;
+                    irqs.push((now + node.setup.irq_latency_ns, Ev::RxIrq { node: n, fifo }));
+                }
+            }
+            for n in overruns {
+                if let Some(node) = self.nodes.get_mut(n) {
+                    let local = node.setup.clock.local(now);
+                    node.module.rx_overrun(local);
+                }
+            }
+        } else {
+            self.stats.error_frames += 1;
+        }
+        for (t, ev) in irqs {
+            self.push(t, ev);
+        }
+        self.push(now + ifs, Ev::Idle);
+    }
+
+    fn rx_irq(&mut self, n: usize, fifo: usize) {
+        if let Some(p) = self.nodes.get_mut(n).and_then(|node| node.can.rx_irq_pending.get_mut(fifo)) {
+            *p = false;
+        }
+        // The driver's ISR reads until the FIFO is empty (frames arriving meanwhile too).
+        while let Some((frame, sof)) =
+            self.nodes.get_mut(n).and_then(|node| node.can.fifos.get_mut(fifo)).and_then(|q| q.pop_front())
+        {
+            self.callback(n, |m, now, can| m.rx(&frame, sof, now, can));
+        }
+    }
+}
