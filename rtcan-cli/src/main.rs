@@ -1,1 +1,48 @@
-fn main() {}
+//! The `rtcan` command. One file per subcommand; this file only dispatches.
+mod check;
+mod decode;
+mod sim;
+
+const USAGE: &str = "\
+usage: rtcan <command> [args]
+
+commands:
+  check <robot.toml> [--json]   validate, admit and plan a robot; print the plan
+                                exit 0 admissible, 1 not admissible, 2 invalid input
+  sim [robot.toml] [--scenario rtcan-paper|file.toml] [--seconds N] [--seed S]
+      [--load X] [--ber P] [--json] [--out DIR] [--sweep]
+                                simulate the robot on a bit-accurate bus (docs/SIM.md)
+  decode <log> --robot robot.toml
+                                candump log -> topic-level messages
+  help                          this text
+";
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    std::process::exit(run(&args));
+}
+
+/// Runs a subcommand and returns the exit code.
+fn run(args: &[String]) -> i32 {
+    let (cmd, rest) = match args.split_first() {
+        Some((c, r)) => (c.as_str(), r),
+        None => {
+            eprint!("{USAGE}");
+            return 2;
+        }
+    };
+    match cmd {
+        "check" => check::run(rest),
+        "sim" => sim::run(rest),
+        "decode" => decode::run(rest),
+        "help" | "-h" | "--help" => {
+            print!("{USAGE}");
+            0
+        }
+        other => {
+            eprintln!("error: unknown command `{other}`\n");
+            eprint!("{USAGE}");
+            2
+        }
+    }
+}

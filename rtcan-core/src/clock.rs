@@ -1,44 +1,212 @@
 //! The slot clock: maps the node-local clock to bus time. The master's local clock is
 //! bus time; a slave aligns on the sync frame's start-of-frame and corrects its rate.
-//! OWNER: scheduling helper. Signatures fixed.
+//!
+//! Bus time is nanoseconds since slot 0 of absolute cycle 0. A slave keeps an anchor
+//! (local SOF time of the last sync, and that sync's bus time `abs_cycle · cycle_ns`)
+//! and a rate `local ns per bus ns = 1 + ppb / 10⁹`, measured between consecutive syncs
+//! received. Integer math only (i128 for the products): no overflow for any drift the
+//! plausibility check lets through and gaps of millions of cycles.
+//!
+//! The 2014 C code measured the slot length once at start-up and then only reset the
+//! phase at each sync (original-rtcan-code.md §2–3): drift was never corrected within a
+//! cycle, and a missed sync sent the node to a terminal error state. Here a missed sync
+//! just extrapolates with the measured rate, and the counter is unwrapped across gaps.
+use crate::sync::CYCLE_COUNTER_MODULUS;
 use crate::tables::BusConfig;
 use crate::time::Nanos;
+
+/// Parts per billion in one.
+const PPB: i128 = 1_000_000_000;
+/// Largest rate error believed (1 %, twice the ±5000 ppm crystals are specified for);
+/// a larger measurement means the master restarted or the counter jumped: relock.
+pub const MAX_RATE_PPB: i64 = 10_000_000;
 
 /// Slot clock state.
 #[derive(Clone, Copy, Debug)]
 pub struct SlotClock {
-    _p: (),
+    master: bool,
+    cycle_ns: Nanos,
+    wrap: u32,
+    locked: bool,
+    rate_valid: bool,
+    /// Local time of the anchor (master: `start`; slave: SOF of the last sync).
+    anchor_local: Nanos,
+    /// Bus time of the anchor.
+    anchor_bus: Nanos,
+    /// Absolute cycle of the last sync (slave).
+    abs_cycle: u64,
+    /// Cycle counter of the last sync, already reduced modulo `wrap`.
+    counter: u32,
+    /// Local clock rate error: local ns per bus ns = 1 + ppb / 10⁹.
+    ppb: i64,
 }
 
 impl SlotClock {
     /// Master: bus time 0 (slot 0 of cycle 0) is local time `start`.
     pub fn master(bus: &BusConfig, start: Nanos) -> Self {
-        let _ = (bus, start);
-        todo!()
+        let mut c = Self::slave(bus);
+        c.master = true;
+        c.locked = true;
+        c.rate_valid = true;
+        c.anchor_local = start;
+        c
     }
     /// Slave, not yet locked.
     pub fn slave(bus: &BusConfig) -> Self {
-        let _ = bus;
-        todo!()
+        let wrap = match bus.cycle_counter_wrap {
+            0 => CYCLE_COUNTER_MODULUS,
+            w => w.min(CYCLE_COUNTER_MODULUS),
+        };
+        SlotClock {
+            master: false,
+            cycle_ns: bus.cycle_ns().max(1),
+            wrap,
+            locked: false,
+            rate_valid: false,
+            anchor_local: 0,
+            anchor_bus: 0,
+            abs_cycle: 0,
+            counter: 0,
+            ppb: 0,
+        }
     }
     /// Slave: a sync frame with `cycle_counter` had its SOF at local time `sof`.
     /// Aligns the offset and updates the rate estimate. Returns true when locked.
+    /// Master: ignored (its own sync), returns true.
     pub fn on_sync(&mut self, sof: Nanos, cycle_counter: u16) -> bool {
-        let _ = (sof, cycle_counter);
-        todo!()
+        if self.master {
+            return true;
+        }
+        let counter = u32::from(cycle_counter) % self.wrap;
+        if !self.locked {
+            self.lock(sof, counter);
+            return true;
+        }
+        let d_local = i128::from(sof) - i128::from(self.anchor_local);
+        if d_local <= 0 {
+            // Time went backwards or a duplicate timestamp: start over from this sync.
+            self.lock(sof, counter);
+            return true;
+        }
+        // Cycles elapsed by the local clock (current rate), then the value congruent to
+        // the counter difference nearest to it: unwraps the counter across any gap the
+        // local estimate is good to within ±wrap/2 cycles.
+        let cyc = i128::from(self.cycle_ns);
+        let est_bus = div_round(d_local * PPB, PPB + i128::from(self.ppb));
+        let n_est = div_round(est_bus, cyc);
+        let wrap = i128::from(self.wrap);
+        let diff = i128::from(counter) - i128::from(self.counter);
+        let mut r = (diff - n_est).rem_euclid(wrap);
+        if r > wrap / 2 {
+            r -= wrap;
+        }
+        let d_cycles = n_est + r;
+        if d_cycles == 0 {
+            // The same sync again (e.g. a retransmission): nothing new.
+            return true;
+        }
+        if d_cycles < 0 {
+            self.lock(sof, counter);
+            return true;
+        }
+        let d_bus = d_cycles * cyc;
+        let measured = div_round((d_local - d_bus) * PPB, d_bus);
+        if measured.abs() > i128::from(MAX_RATE_PPB) {
+            self.lock(sof, counter);
+            return true;
+        }
+        let measured = measured as i64; // |measured| <= MAX_RATE_PPB
+        self.ppb = if self.rate_valid {
+            // Light low-pass: SOF timestamps jitter; a real drift change still settles
+            // within a few cycles.
+            self.ppb + (measured - self.ppb) / 4
+        } else {
+            measured
+        };
+        self.rate_valid = true;
+        self.abs_cycle = self.abs_cycle.saturating_add(d_cycles as u64);
+        self.anchor_local = sof;
+        self.anchor_bus = self.abs_cycle.saturating_mul(self.cycle_ns);
+        self.counter = counter;
+        true
     }
     /// True once the slave has a usable offset (master: always).
     pub fn is_locked(&self) -> bool {
-        todo!()
+        self.locked
     }
-    /// Bus time (ns since slot 0 of absolute cycle 0) at local time `local`.
+    /// True once the rate has been measured (second sync; master: always).
+    pub fn is_rate_valid(&self) -> bool {
+        self.rate_valid
+    }
+    /// Measured rate error of the local clock against the bus in parts per billion
+    /// (positive: the local clock runs fast). 0 for the master and before the second sync.
+    pub fn rate_ppb(&self) -> i64 {
+        self.ppb
+    }
+    /// Whole cycles elapsed since the last sync received at local time `local` (master:
+    /// always 0; unlocked slave: `u64::MAX`). The engine declares sync loss from it.
+    pub fn cycles_since_sync(&self, local: Nanos) -> u64 {
+        if self.master {
+            return 0;
+        }
+        if !self.locked {
+            return u64::MAX;
+        }
+        self.to_bus(local).saturating_sub(self.anchor_bus) / self.cycle_ns
+    }
+    /// Absolute cycle of the last sync received (`None` before lock; master: `None`).
+    pub fn last_sync_cycle(&self) -> Option<u64> {
+        (self.locked && !self.master).then_some(self.abs_cycle)
+    }
+    /// Cycle counter carried by the sync of absolute cycle `abs_cycle`.
+    pub fn cycle_counter(&self, abs_cycle: u64) -> u16 {
+        (abs_cycle % u64::from(self.wrap)) as u16
+    }
+    /// Cycle length in ns.
+    pub fn cycle_ns(&self) -> Nanos {
+        self.cycle_ns
+    }
+    /// Slave: forget the lock (e.g. after sync loss); the next sync relocks.
+    pub fn unlock(&mut self) {
+        if !self.master {
+            self.locked = false;
+            self.rate_valid = false;
+            self.ppb = 0;
+        }
+    }
+    /// Bus time (ns since slot 0 of absolute cycle 0) at local time `local`; saturates
+    /// at 0 before bus time 0. Before lock a slave returns `local` unchanged.
     pub fn to_bus(&self, local: Nanos) -> Nanos {
-        let _ = local;
-        todo!()
+        let d_local = i128::from(local) - i128::from(self.anchor_local);
+        let d_bus = div_round(d_local * PPB, PPB + i128::from(self.ppb));
+        clamp_nanos(i128::from(self.anchor_bus) + d_bus)
     }
-    /// Local time at which bus time `bus` occurs.
+    /// Local time at which bus time `bus` occurs (within 1 ns, the inverse of `to_bus`).
     pub fn to_local(&self, bus: Nanos) -> Nanos {
-        let _ = bus;
-        todo!()
+        let d_bus = i128::from(bus) - i128::from(self.anchor_bus);
+        let d_local = div_round(d_bus * (PPB + i128::from(self.ppb)), PPB);
+        clamp_nanos(i128::from(self.anchor_local) + d_local)
     }
+
+    fn lock(&mut self, sof: Nanos, counter: u32) {
+        self.locked = true;
+        self.rate_valid = false;
+        self.ppb = 0;
+        self.abs_cycle = u64::from(counter);
+        self.counter = counter;
+        self.anchor_local = sof;
+        self.anchor_bus = self.abs_cycle.saturating_mul(self.cycle_ns);
+    }
+}
+
+/// `a / b` rounded to nearest (ties up), for `b > 0`.
+fn div_round(a: i128, b: i128) -> i128 {
+    if b <= 0 {
+        return a;
+    }
+    (2 * a + b).div_euclid(2 * b)
+}
+
+fn clamp_nanos(v: i128) -> Nanos {
+    Nanos::try_from(v.max(0)).unwrap_or(Nanos::MAX)
 }

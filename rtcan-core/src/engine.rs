@@ -57,16 +57,28 @@ pub struct Policy {
 
 impl Policy {
     /// Our policy.
-    pub const OURS: Policy = Policy { fit_window_end: true, drop_hopeless: true };
+    pub const OURS: Policy = Policy {
+        fit_window_end: true,
+        drop_hopeless: true,
+    };
     /// The RTCAN paper's policy as published: EDF head only, drop only once the
     /// deadline has passed.
-    pub const PAPER: Policy = Policy { fit_window_end: false, drop_hopeless: false };
+    pub const PAPER: Policy = Policy {
+        fit_window_end: false,
+        drop_hopeless: false,
+    };
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Item {
     /// A topic message: `fragment` is the counter of the next frame to send.
-    Topic { tx: u8, token: Token, fragment: u8, crc: u16, deadline: Nanos },
+    Topic {
+        tx: u8,
+        token: Token,
+        fragment: u8,
+        crc: u16,
+        deadline: Nanos,
+    },
     /// This module's heartbeat.
     Heartbeat,
 }
@@ -75,10 +87,19 @@ enum Item {
 enum Loaded {
     Free,
     Sync,
-    Hrt { tx: u8, token: Token, fragment: u8 },
+    Hrt {
+        tx: u8,
+        token: Token,
+        fragment: u8,
+    },
     /// Free-window frame; `latest_start` (local) is when it must be aborted if it has
     /// not started, so it cannot overrun the next reserved slot.
-    Window { item: Item, key: u64, latest_start: Nanos, abort_requested: bool },
+    Window {
+        item: Item,
+        key: u64,
+        latest_start: Nanos,
+        abort_requested: bool,
+    },
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -129,7 +150,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let bus = tables.bus;
         let master = !tables.master_masks.is_empty();
         let start = now + bus.slot_ns;
-        let clock = if master { SlotClock::master(&bus, start) } else { SlotClock::slave(&bus) };
+        let clock = if master {
+            SlotClock::master(&bus, start)
+        } else {
+            SlotClock::slave(&bus)
+        };
         let mut wc_ns = [0; 9];
         let mut dlc = 0;
         while dlc < 9 {
@@ -145,7 +170,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             clock,
             master,
             wc_ns,
-            slots_per_hyper: bus.hyperperiod_cycles.saturating_mul(bus.slots_per_cycle as u32).max(1),
+            slots_per_hyper: bus
+                .hyperperiod_cycles
+                .saturating_mul(bus.slots_per_cycle as u32)
+                .max(1),
             next_boundary: if master { start } else { Nanos::MAX },
             next_abs_cycle: 0,
             next_slot: 0,
@@ -175,9 +203,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         &self.counters
     }
 
-    /// True on the master, and on a slave while it follows the master's sync.
+    /// True on the master, and on a slave while it follows the master's sync. A slave
+    /// starts transmitting only once it knows both offset and rate (second sync): with
+    /// the offset alone, a 5000 ppm clock would be 50 us off by the end of a 10 ms cycle.
     pub fn is_synced(&self) -> bool {
-        self.master || (self.clock.is_locked() && self.next_boundary != Nanos::MAX)
+        self.master || (self.clock.is_rate_valid() && self.next_boundary != Nanos::MAX)
     }
 
     /// The slot clock (bus time of a local instant: `clock().to_bus(now)`).
@@ -212,9 +242,17 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// The local time `poll` must run next (slot boundary or a window-close abort).
     pub fn next_wakeup(&self) -> Nanos {
+        if !self.is_synced() {
+            return Nanos::MAX;
+        }
         let mut next = self.next_boundary;
         for mb in self.mailboxes.iter() {
-            if let Loaded::Window { latest_start, abort_requested: false, .. } = *mb {
+            if let Loaded::Window {
+                latest_start,
+                abort_requested: false,
+                ..
+            } = *mb
+            {
                 next = next.min(latest_start);
             }
         }
@@ -223,7 +261,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     fn abort_overdue(&mut self, now: Nanos, can: &mut impl Controller) {
         for (i, mb) in self.mailboxes.iter_mut().enumerate() {
-            if let Loaded::Window { latest_start, abort_requested, .. } = mb {
+            if let Loaded::Window {
+                latest_start,
+                abort_requested,
+                ..
+            } = mb
+            {
                 if !*abort_requested && *latest_start <= now {
                     *abort_requested = true;
                     can.abort(Mailbox(i as u8));
@@ -233,7 +276,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     /// Handles the boundary `self.next_boundary` and advances to the next one.
-    fn slot_boundary(&mut self, now: Nanos, late: bool, can: &mut impl Controller, host: &mut impl Host) {
+    fn slot_boundary(
+        &mut self,
+        now: Nanos,
+        late: bool,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
         let slot = self.next_slot;
         let hyper_slot = self.next_hyper_slot;
         let abs_cycle = self.next_abs_cycle;
@@ -245,8 +294,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         } else {
             self.next_slot = slot + 1;
         }
-        self.next_hyper_slot = if hyper_slot + 1 >= self.slots_per_hyper { 0 } else { hyper_slot + 1 };
-        let next_bus = (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
+        self.next_hyper_slot = if hyper_slot + 1 >= self.slots_per_hyper {
+            0
+        } else {
+            hyper_slot + 1
+        };
+        let next_bus =
+            (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
         self.next_boundary = self.clock.to_local(next_bus);
         self.window_end = 0;
 
@@ -273,21 +327,42 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
         let run = free_run(self.cycle_mask, slot, spc) as u64;
         let end_bus = (abs_cycle * spc as u64 + slot as u64 + run) * self.tables.bus.slot_ns;
-        self.window_end = self.clock.to_local(end_bus).saturating_sub(self.tables.bus.guard_ns);
+        self.window_end = self
+            .clock
+            .to_local(end_bus)
+            .saturating_sub(self.tables.bus.guard_ns);
         self.refill(now, can, host);
     }
 
-    fn start_cycle(&mut self, abs_cycle: u64, late: bool, can: &mut impl Controller, host: &mut impl Host) {
+    fn start_cycle(
+        &mut self,
+        abs_cycle: u64,
+        late: bool,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
         let bus = self.tables.bus;
         if self.master {
             let hyper = bus.hyperperiod_cycles.max(1) as u64;
             let idx = (abs_cycle % hyper) as usize;
-            self.cycle_mask = self.tables.master_masks.get(idx).copied().unwrap_or(u64::MAX) | 1;
+            self.cycle_mask = self
+                .tables
+                .master_masks
+                .get(idx)
+                .copied()
+                .unwrap_or(u64::MAX)
+                | 1;
             self.mask_cycle = abs_cycle;
             let wrap = bus.cycle_counter_wrap.max(1) as u64;
             let cycle = (abs_cycle % wrap) as u16;
             if !late {
-                let frame = sync_frame(Sync { cycle, mask: self.cycle_mask }, bus.slots_per_cycle);
+                let frame = sync_frame(
+                    Sync {
+                        cycle,
+                        mask: self.cycle_mask,
+                    },
+                    bus.slots_per_cycle,
+                );
                 self.load_any(Loaded::Sync, &frame, can);
             }
         } else {
@@ -331,7 +406,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     fn load_hrt(&mut self, tx: u8, fragment: u8, can: &mut impl Controller, host: &mut impl Host) {
-        let Some(topic) = self.tables.tx.get(tx as usize).copied() else { return };
+        let Some(topic) = self.tables.tx.get(tx as usize).copied() else {
+            return;
+        };
         let count = fragment_count(topic.size as usize);
         if fragment + 1 == count {
             // First fragment: sample the latest value and latch it for the whole transfer.
@@ -351,12 +428,26 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 }
             }
         }
-        let Some(x) = self.hrt.filter(|x| x.tx == tx) else { return };
+        let Some(x) = self.hrt.filter(|x| x.tx == tx) else {
+            return;
+        };
         let mut data = [0u8; 8];
         let dlc = fragment_data(host.payload(x.token), x.crc, fragment, &mut data);
-        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else { return };
-        let Some(frame) = Frame::from_parts(id, dlc, data) else { return };
-        if !self.load_any(Loaded::Hrt { tx, token: x.token, fragment }, &frame, can) {
+        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else {
+            return;
+        };
+        let Some(frame) = Frame::from_parts(id, dlc, data) else {
+            return;
+        };
+        if !self.load_any(
+            Loaded::Hrt {
+                tx,
+                token: x.token,
+                fragment,
+            },
+            &frame,
+            can,
+        ) {
             Counters::bump(&mut self.counters.hrt_late);
             self.abandon_hrt(tx, host);
         }
@@ -370,7 +461,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let now_bus = self.clock.to_bus(now);
         let remaining = self.window_end - now;
         while let Some(free) = self.mailboxes.iter().position(|m| *m == Loaded::Free) {
-            let Some((key, item)) = self.pick(now_bus, remaining, host) else { break };
+            let Some((key, item)) = self.pick(now_bus, remaining, host) else {
+                break;
+            };
             let (frame, dlc) = match item {
                 Item::Heartbeat => {
                     let hb = Heartbeat {
@@ -383,8 +476,16 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         None => continue,
                     }
                 }
-                Item::Topic { tx, token, fragment, crc, deadline } => {
-                    let Some(topic) = self.tables.tx.get(tx as usize) else { continue };
+                Item::Topic {
+                    tx,
+                    token,
+                    fragment,
+                    crc,
+                    deadline,
+                } => {
+                    let Some(topic) = self.tables.tx.get(tx as usize) else {
+                        continue;
+                    };
                     let laxity = if key == NRT_KEY {
                         LAXITY_NRT
                     } else {
@@ -399,7 +500,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     };
                     let mut data = [0u8; 8];
                     let dlc = fragment_data(host.payload(token), crc, fragment, &mut data);
-                    let Some(id) = CanId::new(laxity, topic.msg_id, fragment) else { continue };
+                    let Some(id) = CanId::new(laxity, topic.msg_id, fragment) else {
+                        continue;
+                    };
                     match Frame::from_parts(id, dlc, data) {
                         Some(f) => (f, dlc),
                         None => continue,
@@ -409,7 +512,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             let wc = self.wc(dlc);
             let latest_start = self.window_end.saturating_sub(wc);
             if let Some(mb) = self.mailboxes.get_mut(free) {
-                *mb = Loaded::Window { item, key, latest_start, abort_requested: false };
+                *mb = Loaded::Window {
+                    item,
+                    key,
+                    latest_start,
+                    abort_requested: false,
+                };
             }
             self.in_flight += 1;
             can.load(Mailbox(free as u8), &frame);
@@ -418,22 +526,35 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// The next window item: the EDF head if it fits the remaining window time, else
     /// (policy permitting) the most urgent one that fits; drops hopeless messages.
-    fn pick(&mut self, now_bus: Nanos, remaining: Nanos, host: &mut impl Host) -> Option<(u64, Item)> {
+    fn pick(
+        &mut self,
+        now_bus: Nanos,
+        remaining: Nanos,
+        host: &mut impl Host,
+    ) -> Option<(u64, Item)> {
         let wc8 = self.wc(8);
         while let Some((key, head)) = self.queue.peek().map(|(k, i)| (k, *i)) {
-            if let Item::Topic { tx, token, fragment, deadline, .. } = head {
+            if let Item::Topic {
+                tx,
+                token,
+                fragment,
+                deadline,
+                ..
+            } = head
+            {
                 // Hopeless: even sent back to back from now, the remaining fragments
                 // cannot all finish before the deadline.
                 let need = (fragment as Nanos + 1) * wc8;
                 if key != NRT_KEY
-                    && (deadline < now_bus || (self.policy.drop_hopeless && deadline - now_bus < need))
+                    && (deadline < now_bus
+                        || (self.policy.drop_hopeless && deadline - now_bus < need))
                 {
                     self.queue.pop();
                     self.drop_missed(tx, token, host);
                     continue;
                 }
             }
-            if self.item_wc(&head) <= remaining {
+            if self.item_wc(&head) < remaining {
                 return self.queue.pop();
             }
             break;
@@ -442,12 +563,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             let wc = self.wc_ns;
             let tables = self.tables;
             if let Some(found) = self.queue.pop_first_matching(|_, item| {
-                item_dlc(item, &tables).and_then(|d| wc.get(d as usize)).is_some_and(|w| *w <= remaining)
+                item_dlc(item, &tables)
+                    .and_then(|d| wc.get(d as usize))
+                    .is_some_and(|w| *w < remaining)
             }) {
                 return Some(found);
             }
         }
-        if self.heartbeat_pending && self.wc(5) <= remaining {
+        if self.heartbeat_pending && self.wc(5) < remaining {
             self.heartbeat_pending = false;
             return Some((NRT_KEY, Item::Heartbeat));
         }
@@ -469,7 +592,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     /// A frame passed the filters; `sof` is its start-of-frame local timestamp.
-    pub fn on_rx(&mut self, frame: &Frame, sof: Nanos, can: &mut impl Controller, host: &mut impl Host) {
+    pub fn on_rx(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
         let id = frame.id();
         if id.is_sync() {
             self.on_sync(frame, sof, host);
@@ -478,20 +607,30 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let msg = id.msg_id().0;
         if (HEARTBEAT_BASE..FIRST_TOPIC_MSG_ID).contains(&msg) {
             match parse_heartbeat(frame) {
-                Some(hb) if hb.fingerprint != self.tables.bus.fingerprint => host.event(Event::FingerprintMismatch {
+                Some(hb) if hb.fingerprint != self.tables.bus.fingerprint => {
+                    host.event(Event::FingerprintMismatch {
+                        module: hb.module,
+                        fingerprint: hb.fingerprint,
+                    })
+                }
+                Some(hb) => host.event(Event::Heartbeat {
                     module: hb.module,
-                    fingerprint: hb.fingerprint,
+                    state: hb.state,
                 }),
-                Some(hb) => host.event(Event::Heartbeat { module: hb.module, state: hb.state }),
                 None => Counters::bump(&mut self.counters.rx_bad_heartbeat),
             }
             return;
         }
-        let Ok(idx) = self.tables.rx.binary_search_by_key(&id.msg_id(), |t| t.msg_id) else {
+        let Ok(idx) = self
+            .tables
+            .rx
+            .binary_search_by_key(&id.msg_id(), |t| t.msg_id)
+        else {
             Counters::bump(&mut self.counters.rx_unknown_id);
             return;
         };
-        let (Some(topic), Some(state)) = (self.tables.rx.get(idx), self.rx_state.get_mut(idx)) else {
+        let (Some(topic), Some(state)) = (self.tables.rx.get(idx), self.rx_state.get_mut(idx))
+        else {
             Counters::bump(&mut self.counters.rx_unknown_id);
             return;
         };
@@ -538,7 +677,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         self.cycle_mask = sync.mask;
         self.mask_cycle = abs_cycle;
         let hyper = self.tables.bus.hyperperiod_cycles.max(1) as u64;
-        let ahead = abs_cycle > self.next_abs_cycle || (abs_cycle == self.next_abs_cycle && self.next_slot == 0);
+        let ahead = abs_cycle > self.next_abs_cycle
+            || (abs_cycle == self.next_abs_cycle && self.next_slot == 0);
         if !was_synced || ahead {
             // (Re)start the slot sequence at slot 1 of this cycle: first lock, or the sync
             // came before this node's own slot-0 boundary (its clock ran slow).
@@ -547,7 +687,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.next_hyper_slot = ((abs_cycle % hyper) * spc as u64 + 1) as u32;
             self.cursor = CalendarCursor::default();
         }
-        let next_bus = (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
+        let next_bus =
+            (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
         self.next_boundary = self.clock.to_local(next_bus);
         if !was_synced {
             host.event(Event::Synced);
@@ -563,7 +704,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
-        let Some(slot) = self.mailboxes.get_mut(mailbox.0 as usize) else { return };
+        let Some(slot) = self.mailboxes.get_mut(mailbox.0 as usize) else {
+            return;
+        };
         let what = core::mem::replace(slot, Loaded::Free);
         match result {
             TxResult::Sent => Counters::bump(&mut self.counters.tx_frames),
@@ -572,7 +715,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
         match what {
             Loaded::Free | Loaded::Sync => {}
-            Loaded::Hrt { tx, token, fragment } => match result {
+            Loaded::Hrt {
+                tx,
+                token,
+                fragment,
+            } => match result {
                 TxResult::Sent if fragment == 0 => {
                     self.hrt = None;
                     host.tx_done(tx, Some(token), TxOutcome::Sent);
@@ -585,14 +732,41 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 match (item, result) {
                     (Item::Heartbeat, TxResult::Sent) => {}
                     (Item::Heartbeat, _) => self.heartbeat_pending = true,
-                    (Item::Topic { tx, token, fragment: 0, .. }, TxResult::Sent) => {
+                    (
+                        Item::Topic {
+                            tx,
+                            token,
+                            fragment: 0,
+                            ..
+                        },
+                        TxResult::Sent,
+                    ) => {
                         host.tx_done(tx, Some(token), TxOutcome::Sent);
                     }
-                    (Item::Topic { tx, token, fragment, crc, deadline }, r) => {
+                    (
+                        Item::Topic {
+                            tx,
+                            token,
+                            fragment,
+                            crc,
+                            deadline,
+                        },
+                        r,
+                    ) => {
                         // Next fragment after a success; the same one again after an abort
                         // or a lost arbitration. Laxity is re-encoded when it is loaded.
-                        let fragment = if r == TxResult::Sent { fragment - 1 } else { fragment };
-                        let next = Item::Topic { tx, token, fragment, crc, deadline };
+                        let fragment = if r == TxResult::Sent {
+                            fragment - 1
+                        } else {
+                            fragment
+                        };
+                        let next = Item::Topic {
+                            tx,
+                            token,
+                            fragment,
+                            crc,
+                            deadline,
+                        };
                         if self.queue.push(key, next).is_err() {
                             // Cannot happen: submit keeps room for every frame in flight.
                             self.drop_missed(tx, token, host);
@@ -613,7 +787,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) -> Result<(), SubmitError> {
-        let topic = self.tables.tx.get(tx as usize).ok_or(SubmitError::NotSubmittable)?;
+        let topic = self
+            .tables
+            .tx
+            .get(tx as usize)
+            .ok_or(SubmitError::NotSubmittable)?;
         let payload = host.payload(token);
         if topic.class == Class::Hrt || payload.len() != topic.size as usize {
             return Err(SubmitError::NotSubmittable);
@@ -632,7 +810,16 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             _ => (NRT_KEY, NRT_KEY),
         };
         self.queue
-            .push(key, Item::Topic { tx, token, fragment, crc, deadline })
+            .push(
+                key,
+                Item::Topic {
+                    tx,
+                    token,
+                    fragment,
+                    crc,
+                    deadline,
+                },
+            )
             .map_err(|_| SubmitError::QueueFull)?;
         self.refill(now, can, host);
         Ok(())

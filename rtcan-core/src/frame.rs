@@ -16,7 +16,11 @@ impl Frame {
     pub fn new(id: CanId, data: &[u8]) -> Option<Self> {
         let mut buf = [0u8; 8];
         buf.get_mut(..data.len())?.copy_from_slice(data);
-        Some(Frame { id, dlc: data.len() as u8, data: buf })
+        Some(Frame {
+            id,
+            dlc: data.len() as u8,
+            data: buf,
+        })
     }
     /// `None` if `dlc > 8`. Bytes past `dlc` are zeroed.
     // `i < 8` is the loop bound: the index cannot panic (const fn cannot use get_mut).

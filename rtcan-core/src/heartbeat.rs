@@ -51,7 +51,11 @@ pub fn parse_heartbeat(frame: &Frame) -> Option<Heartbeat> {
         return None;
     }
     let &[f0, f1, f2, f3, state, ..] = frame.raw_data();
-    Some(Heartbeat { module: (msg - HEARTBEAT_BASE) as u8, state, fingerprint: u32::from_le_bytes([f0, f1, f2, f3]) })
+    Some(Heartbeat {
+        module: (msg - HEARTBEAT_BASE) as u8,
+        state,
+        fingerprint: u32::from_le_bytes([f0, f1, f2, f3]),
+    })
 }
 
 #[cfg(test)]
@@ -60,7 +64,11 @@ mod tests {
 
     #[test]
     fn round_trip_and_range() {
-        let hb = Heartbeat { module: 63, state: 2, fingerprint: 0xDEAD_BEEF };
+        let hb = Heartbeat {
+            module: 63,
+            state: 2,
+            fingerprint: 0xDEAD_BEEF,
+        };
         let f = heartbeat_frame(hb).unwrap();
         assert_eq!(f.id().raw(), 0x1F80_9F80);
         assert_eq!(f.data(), &[0xEF, 0xBE, 0xAD, 0xDE, 2]);
@@ -70,9 +78,16 @@ mod tests {
 
     #[test]
     fn malformed_rejected() {
-        let good = heartbeat_frame(Heartbeat { module: 1, state: 0, fingerprint: 1 }).unwrap();
+        let good = heartbeat_frame(Heartbeat {
+            module: 1,
+            state: 0,
+            fingerprint: 1,
+        })
+        .unwrap();
         let data = good.data();
-        let with = |lax: u8, msg: u16, frag: u8, d: &[u8]| Frame::new(CanId::new(lax, MsgId(msg), frag).unwrap(), d).unwrap();
+        let with = |lax: u8, msg: u16, frag: u8, d: &[u8]| {
+            Frame::new(CanId::new(lax, MsgId(msg), frag).unwrap(), d).unwrap()
+        };
         assert!(parse_heartbeat(&with(63, 0x101, 0, data)).is_some());
         assert_eq!(parse_heartbeat(&with(62, 0x101, 0, data)), None); // SRT laxity
         assert_eq!(parse_heartbeat(&with(63, 0x140, 0, data)), None); // a topic

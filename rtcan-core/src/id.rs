@@ -54,7 +54,9 @@ impl CanId {
         if laxity > 63 || fragment > 127 {
             return None;
         }
-        Some(CanId(((laxity as u32) << 23) | ((msg.0 as u32) << 7) | fragment as u32))
+        Some(CanId(
+            ((laxity as u32) << 23) | ((msg.0 as u32) << 7) | fragment as u32,
+        ))
     }
 
     /// Accepts any 29-bit value (every 29-bit value has a field decoding).

@@ -34,7 +34,11 @@ impl LaxityEncoding {
             LaxityEncoding::Linear { .. } => v,
             LaxityEncoding::Log { .. } => log_offset(v),
         };
-        let offset = if offset > SRT_CODES - 1 { SRT_CODES - 1 } else { offset };
+        let offset = if offset > SRT_CODES - 1 {
+            SRT_CODES - 1
+        } else {
+            offset
+        };
         Some(LAXITY_SRT_MIN + offset as u8)
     }
 
@@ -143,14 +147,23 @@ mod tests {
 
     #[test]
     fn lower_bounds_invert_encode() {
-        for enc in [LIN, LOG, LaxityEncoding::Log { unit_ns: 1 }, LaxityEncoding::Linear { unit_ns: 7 }] {
+        for enc in [
+            LIN,
+            LOG,
+            LaxityEncoding::Log { unit_ns: 1 },
+            LaxityEncoding::Linear { unit_ns: 7 },
+        ] {
             assert_eq!(enc.lower_bound_ns(0), None);
             assert_eq!(enc.lower_bound_ns(63), None);
             for code in LAXITY_SRT_MIN..=LAXITY_SRT_MAX {
                 let lb = enc.lower_bound_ns(code).unwrap();
                 assert_eq!(enc.encode(lb as SNanos), Some(code), "{enc:?} code {code}");
                 if lb > 0 {
-                    assert_eq!(enc.encode(lb as SNanos - 1), Some(code - 1), "{enc:?} code {code}");
+                    assert_eq!(
+                        enc.encode(lb as SNanos - 1),
+                        Some(code - 1),
+                        "{enc:?} code {code}"
+                    );
                 }
             }
         }

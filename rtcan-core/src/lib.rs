@@ -5,7 +5,15 @@
 //! STM32 under RTIC, on a Cortex-M3 under QEMU and in the host simulator.
 //! The normative wire format is `docs/PROTOCOL.md`.
 #![cfg_attr(not(test), no_std)]
-#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic))]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::indexing_slicing,
+        clippy::panic
+    )
+)]
 
 pub mod admission;
 pub mod calendar;

@@ -1,48 +1,274 @@
 //! SRT/NRT transmit queue: EDF by absolute deadline, fixed capacity, O(log n).
-//! OWNER: scheduling helper. Signatures fixed.
+//!
+//! A binary min-heap on `(key, seq)`: `seq` is a 64-bit insertion counter, so items with
+//! equal keys leave in insertion order (FIFO) and the counter never wraps in practice.
+//! The 2014 C code kept a sorted linked list whose insert compared the wrong node after
+//! commit 27d8cde (original-rtcan-code.md §5); a heap with an explicit tie-break cannot
+//! get that order wrong.
+use heapless::Vec;
+
+#[derive(Clone, Copy, Debug)]
+struct Entry<T> {
+    key: u64,
+    seq: u64,
+    item: T,
+}
+
+impl<T> Entry<T> {
+    fn before(&self, other: &Self) -> bool {
+        (self.key, self.seq) < (other.key, other.seq)
+    }
+}
 
 /// A min-queue on `key` (absolute bus-time deadline; NRT uses `u64::MAX`), FIFO among
 /// equal keys, capacity `N`, no allocation.
 pub struct EdfQueue<T, const N: usize> {
-    _p: core::marker::PhantomData<T>,
+    heap: Vec<Entry<T>, N>,
+    seq: u64,
 }
 
 impl<T: Copy, const N: usize> EdfQueue<T, N> {
     /// Empty queue.
     pub const fn new() -> Self {
-        todo!()
+        EdfQueue {
+            heap: Vec::new(),
+            seq: 0,
+        }
     }
     /// Inserts; `Err(item)` when full (reported to the caller, never dropped silently).
     pub fn push(&mut self, key: u64, item: T) -> Result<(), T> {
-        let _ = (key, item);
-        todo!()
+        let entry = Entry {
+            key,
+            seq: self.seq,
+            item,
+        };
+        self.heap.push(entry).map_err(|e| e.item)?;
+        self.seq = self.seq.wrapping_add(1);
+        self.sift_up(self.heap.len() - 1);
+        Ok(())
     }
     /// Smallest key and its item.
     pub fn peek(&self) -> Option<(u64, &T)> {
-        todo!()
+        self.heap.first().map(|e| (e.key, &e.item))
     }
     /// Removes the smallest.
     pub fn pop(&mut self) -> Option<(u64, T)> {
-        todo!()
+        self.remove_at(0)
     }
     /// Removes and returns the smallest-key item satisfying `pred` (O(n) scan; used
     /// near window ends, where the most urgent frame may not fit but a shorter one does).
-    pub fn pop_first_matching(&mut self, pred: impl FnMut(u64, &T) -> bool) -> Option<(u64, T)> {
-        let _ = pred;
-        todo!()
+    /// Among equal keys the earliest inserted wins.
+    pub fn pop_first_matching(
+        &mut self,
+        mut pred: impl FnMut(u64, &T) -> bool,
+    ) -> Option<(u64, T)> {
+        let mut best: Option<(usize, &Entry<T>)> = None;
+        for (i, e) in self.heap.iter().enumerate() {
+            if best.is_some_and(|(_, b)| !e.before(b)) {
+                continue;
+            }
+            if pred(e.key, &e.item) {
+                best = Some((i, e));
+            }
+        }
+        let i = best.map(|(i, _)| i)?;
+        self.remove_at(i)
     }
     /// Number of items.
     pub fn len(&self) -> usize {
-        todo!()
+        self.heap.len()
     }
     /// True if empty.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+    /// True if `len() == N`.
+    pub fn is_full(&self) -> bool {
+        self.heap.is_full()
+    }
+    /// Removes every item (the insertion counter keeps running).
+    pub fn clear(&mut self) {
+        self.heap.clear();
+    }
+    /// All items in heap order (not sorted), e.g. to re-key or inspect them.
+    pub fn iter(&self) -> impl Iterator<Item = (u64, &T)> {
+        self.heap.iter().map(|e| (e.key, &e.item))
+    }
+
+    /// Removes the entry at heap position `i`: the last entry takes its place and moves
+    /// down or up, whichever restores the heap.
+    fn remove_at(&mut self, i: usize) -> Option<(u64, T)> {
+        let last = self.heap.len().checked_sub(1)?;
+        if i > last {
+            return None;
+        }
+        self.heap.swap(i, last);
+        let e = self.heap.pop()?;
+        if i < self.heap.len() {
+            let i = self.sift_down(i);
+            self.sift_up(i);
+        }
+        Some((e.key, e.item))
+    }
+
+    fn before(&self, a: usize, b: usize) -> bool {
+        match (self.heap.get(a), self.heap.get(b)) {
+            (Some(x), Some(y)) => x.before(y),
+            _ => false,
+        }
+    }
+
+    fn sift_up(&mut self, mut i: usize) {
+        while i > 0 {
+            let parent = (i - 1) / 2;
+            if !self.before(i, parent) {
+                break;
+            }
+            self.heap.swap(i, parent);
+            i = parent;
+        }
+    }
+
+    /// Returns the final position.
+    fn sift_down(&mut self, mut i: usize) -> usize {
+        loop {
+            let (l, r) = (2 * i + 1, 2 * i + 2);
+            let mut m = i;
+            if self.before(l, m) {
+                m = l;
+            }
+            if self.before(r, m) {
+                m = r;
+            }
+            if m == i {
+                return i;
+            }
+            self.heap.swap(i, m);
+            i = m;
+        }
     }
 }
 
 impl<T: Copy, const N: usize> Default for EdfQueue<T, N> {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drain<const N: usize>(q: &mut EdfQueue<u32, N>) -> std::vec::Vec<(u64, u32)> {
+        core::iter::from_fn(|| q.pop()).collect()
+    }
+
+    #[test]
+    fn pops_in_deadline_order_fifo_among_equal_keys() {
+        let mut q: EdfQueue<u32, 16> = EdfQueue::new();
+        let keys = [50u64, 10, 30, 10, u64::MAX, 30, 10, 0, u64::MAX, 20];
+        for (i, &k) in keys.iter().enumerate() {
+            q.push(k, i as u32).unwrap();
+        }
+        assert_eq!(q.len(), 10);
+        assert_eq!(q.peek(), Some((0, &7)));
+        assert_eq!(
+            drain(&mut q),
+            [
+                (0, 7),
+                (10, 1),
+                (10, 3),
+                (10, 6),
+                (20, 9),
+                (30, 2),
+                (30, 5),
+                (50, 0),
+                (u64::MAX, 4),
+                (u64::MAX, 8)
+            ]
+        );
+        assert!(q.is_empty());
+        assert_eq!(q.pop(), None);
+        assert_eq!(q.peek(), None);
+    }
+
+    #[test]
+    fn full_queue_returns_the_item() {
+        let mut q: EdfQueue<u32, 3> = EdfQueue::new();
+        for i in 0..3 {
+            assert_eq!(q.push(5, i), Ok(()));
+        }
+        assert!(q.is_full());
+        assert_eq!(q.push(1, 99), Err(99));
+        assert_eq!(q.len(), 3);
+        assert_eq!(q.pop(), Some((5, 0)));
+        assert_eq!(q.push(1, 99), Ok(()));
+        assert_eq!(drain(&mut q), [(1, 99), (5, 1), (5, 2)]);
+    }
+
+    #[test]
+    fn pop_first_matching_takes_the_most_urgent_match_and_keeps_heap_order() {
+        let mut q: EdfQueue<u32, 8> = EdfQueue::default();
+        // item = frame length in bits; only short ones fit the window end.
+        for (k, bits) in [
+            (10u64, 130u32),
+            (20, 60),
+            (20, 70),
+            (5, 120),
+            (40, 50),
+            (20, 65),
+        ] {
+            q.push(k, bits).unwrap();
+        }
+        assert_eq!(q.pop_first_matching(|_, &b| b <= 70), Some((20, 60)));
+        assert_eq!(q.pop_first_matching(|_, &b| b <= 70), Some((20, 70)));
+        assert_eq!(q.pop_first_matching(|_, &b| b < 10), None);
+        assert_eq!(q.pop_first_matching(|k, _| k > 30), Some((40, 50)));
+        assert_eq!(drain(&mut q), [(5, 120), (10, 130), (20, 65)]);
+    }
+
+    #[test]
+    fn matches_a_sorted_model_under_random_operations() {
+        // xorshift: deterministic, no extra dev-dependency needed here.
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let mut q: EdfQueue<u32, 16> = EdfQueue::new();
+        let mut model: std::vec::Vec<(u64, u64, u32)> = std::vec::Vec::new(); // (key, seq, item)
+        let mut seq = 0;
+        for step in 0..20_000u32 {
+            match rnd() % 4 {
+                0 | 1 => {
+                    let k = rnd() % 8;
+                    let r = q.push(k, step);
+                    if model.len() < 16 {
+                        assert_eq!(r, Ok(()));
+                        model.push((k, seq, step));
+                        seq += 1;
+                    } else {
+                        assert_eq!(r, Err(step));
+                    }
+                }
+                2 => {
+                    model.sort();
+                    let want = (!model.is_empty())
+                        .then(|| model.remove(0))
+                        .map(|(k, _, i)| (k, i));
+                    assert_eq!(q.pop(), want);
+                }
+                _ => {
+                    let m = (rnd() % 3) as u32;
+                    model.sort();
+                    let pos = model.iter().position(|e| e.2 % 3 == m);
+                    let want = pos.map(|p| model.remove(p)).map(|(k, _, i)| (k, i));
+                    assert_eq!(q.pop_first_matching(|_, &i| i % 3 == m), want);
+                }
+            }
+            assert_eq!(q.len(), model.len());
+        }
     }
 }

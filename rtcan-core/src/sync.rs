@@ -68,7 +68,10 @@ pub fn parse_sync(frame: &Frame, slots: u8) -> Option<Sync> {
     if mask & 1 == 0 || mask & !slots_mask(slots) != 0 {
         return None;
     }
-    Some(Sync { cycle: (id.raw() % CYCLE_COUNTER_MODULUS) as u16, mask })
+    Some(Sync {
+        cycle: (id.raw() % CYCLE_COUNTER_MODULUS) as u16,
+        mask,
+    })
 }
 
 /// Fallbacks for the two constructors `sync_frame` calls with arguments that are always in
@@ -102,7 +105,10 @@ mod tests {
     #[test]
     fn round_trip_and_normalisation() {
         for slots in [1u8, 2, 8, 9, 40, 60, 63, 64] {
-            let s = Sync { cycle: 0x7FFF, mask: 0x8000_0000_0000_0002 };
+            let s = Sync {
+                cycle: 0x7FFF,
+                mask: 0x8000_0000_0000_0002,
+            };
             let f = sync_frame(s, slots);
             assert_eq!(f.dlc(), slots.div_ceil(8));
             let p = parse_sync(&f, slots).unwrap();
@@ -110,7 +116,18 @@ mod tests {
             assert_eq!(p.mask, (0x8000_0000_0000_0003) & slots_mask(slots));
         }
         // Cycle counter taken mod 2^15.
-        assert_eq!(sync_frame(Sync { cycle: 0x8005, mask: 1 }, 8).id().raw(), 5);
+        assert_eq!(
+            sync_frame(
+                Sync {
+                    cycle: 0x8005,
+                    mask: 1
+                },
+                8
+            )
+            .id()
+            .raw(),
+            5
+        );
     }
 
     #[test]
@@ -122,7 +139,10 @@ mod tests {
         assert_eq!(parse_sync(&Frame::new(id, &[1, 1]).unwrap(), 8), None);
         // Bit 9 with 9 slots: past the cycle.
         assert_eq!(parse_sync(&Frame::new(id, &[1, 2]).unwrap(), 9), None);
-        assert_eq!(parse_sync(&Frame::new(id, &[1, 1]).unwrap(), 9).map(|s| s.mask), Some(0x101));
+        assert_eq!(
+            parse_sync(&Frame::new(id, &[1, 1]).unwrap(), 9).map(|s| s.mask),
+            Some(0x101)
+        );
         // Not a sync ID (message ID 0x0100 = heartbeat of module 0).
         let hb = CanId::new(0, MsgId(0x100), 0).unwrap();
         assert_eq!(parse_sync(&Frame::new(hb, &[1]).unwrap(), 8), None);

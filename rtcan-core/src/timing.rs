@@ -89,7 +89,12 @@ struct BitWriter {
 impl BitWriter {
     const fn new() -> Self {
         // `run = 0` so the SOF starts the first run whatever `last` says.
-        BitWriter { crc: 0, bits: 0, last: true, run: 0 }
+        BitWriter {
+            crc: 0,
+            bits: 0,
+            last: true,
+            run: 0,
+        }
     }
 
     /// A bit covered by the CRC (SOF..data).

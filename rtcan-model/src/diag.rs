@@ -116,7 +116,13 @@ pub struct Diagnostic {
 impl Diagnostic {
     /// A diagnostic without help or notes.
     pub fn new(code: Code, span: Option<Span>, message: impl Into<String>) -> Self {
-        Diagnostic { code, message: message.into(), span, help: Vec::new(), notes: Vec::new() }
+        Diagnostic {
+            code,
+            message: message.into(),
+            span,
+            help: Vec::new(),
+            notes: Vec::new(),
+        }
     }
     /// Adds a help line.
     pub fn help(mut self, text: impl Into<String>) -> Self {
@@ -148,7 +154,11 @@ impl Diagnostics {
     }
     /// True when every error is a schedule error (input valid, robot not admissible).
     pub fn only_schedule(&self) -> bool {
-        !self.items.is_empty() && self.items.iter().all(|d| d.code.category() == Category::Schedule)
+        !self.items.is_empty()
+            && self
+                .items
+                .iter()
+                .all(|d| d.code.category() == Category::Schedule)
     }
     /// 1-based line and column (in characters) of a byte offset.
     pub fn line_col(&self, offset: usize) -> (usize, usize) {
@@ -162,7 +172,13 @@ impl Diagnostics {
             out.push('\n');
         }
         let n = self.items.len();
-        let _ = writeln!(out, "error: {} {} in {}", n, if n == 1 { "error" } else { "errors" }, self.file);
+        let _ = writeln!(
+            out,
+            "error: {} {} in {}",
+            n,
+            if n == 1 { "error" } else { "errors" },
+            self.file
+        );
         out
     }
 
@@ -184,7 +200,11 @@ impl Diagnostics {
             let line_start = start - (col_bytes(&self.source, start));
             let line_end = line_start + text.len();
             let end = span.end.clamp(start, line_end.max(start));
-            let width = self.source.get(start..end).map_or(1, |s| s.chars().count()).max(1);
+            let width = self
+                .source
+                .get(start..end)
+                .map_or(1, |s| s.chars().count())
+                .max(1);
             let _ = writeln!(out, "{pad} | {}{}", " ".repeat(col - 1), "^".repeat(width));
         }
         let pad = " ".repeat(gutter);
@@ -224,7 +244,10 @@ fn floor_char_boundary(s: &str, mut i: usize) -> usize {
 /// The text of the line holding `offset`, without its newline.
 fn line_text(source: &str, offset: usize) -> &str {
     let offset = floor_char_boundary(source, offset.min(source.len()));
-    let start = source.get(..offset).and_then(|s| s.rfind('\n')).map_or(0, |i| i + 1);
+    let start = source
+        .get(..offset)
+        .and_then(|s| s.rfind('\n'))
+        .map_or(0, |i| i + 1);
     let rest = source.get(start..).unwrap_or("");
     let line = rest.split('\n').next().unwrap_or("");
     line.strip_suffix('\r').unwrap_or(line)
@@ -240,7 +263,9 @@ mod tests {
         let d = Diagnostics {
             file: "robot.toml".into(),
             source: src,
-            items: vec![Diagnostic::new(Code::TooManySlots, Some(14..16), "65 slots").help("at most 64")],
+            items: vec![
+                Diagnostic::new(Code::TooManySlots, Some(14..16), "65 slots").help("at most 64"),
+            ],
         };
         assert_eq!(
             d.render(),

@@ -1,1 +1,151 @@
-//! The robot model.
+//! The robot model: robot.toml parsed once with spans, validated (every error collected),
+//! planned (HRT admission through rtcan-core, message IDs, CAN filter banks, calendars,
+//! bus load, fingerprint) and reported. The proc macro, build.rs, the simulator and the
+//! `rtcan` CLI all go through [`analyze`] / [`Robot::load`]: no rule lives twice.
+//!
+//! The schema is documented in `docs/ROBOT_TOML.md`.
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::indexing_slicing,
+        clippy::panic
+    )
+)]
+
+pub mod diag;
+pub mod filters;
+pub mod fingerprint;
+pub mod ids;
+pub mod model;
+pub mod plan;
+pub mod report;
+pub mod schedule;
+pub mod syntax;
+pub mod units;
+pub mod validate;
+
+pub use diag::{Category, Code, Diagnostic, Diagnostics, Span};
+pub use model::{Board, FieldType, FilterMode, Model, MsgType, Prim};
+pub use plan::{BusPlan, Load, ModulePlan, ModuleTables, Plan, SubscriberPlan, TopicPlan};
+
+use std::path::Path;
+
+/// Outcome of checking a robot.toml.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// Valid and admissible: a plan exists.
+    Admissible,
+    /// Valid, but the bus cannot carry it (only schedule errors).
+    NotAdmissible,
+    /// Invalid input.
+    Invalid,
+}
+
+impl Status {
+    /// `rtcan check` exit code: 0, 1, 2.
+    pub const fn exit_code(self) -> i32 {
+        match self {
+            Status::Admissible => 0,
+            Status::NotAdmissible => 1,
+            Status::Invalid => 2,
+        }
+    }
+}
+
+/// Everything one check produced.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// The validated model (present when there is no input error).
+    pub model: Option<Model>,
+    /// The plan (present when there is no error at all).
+    pub plan: Option<Plan>,
+    /// All errors.
+    pub diagnostics: Diagnostics,
+}
+
+impl Analysis {
+    /// Admissible, not admissible, or invalid.
+    pub fn status(&self) -> Status {
+        if self.plan.is_some() && self.diagnostics.is_empty() {
+            Status::Admissible
+        } else if self.model.is_some() && self.diagnostics.only_schedule() {
+            Status::NotAdmissible
+        } else {
+            Status::Invalid
+        }
+    }
+}
+
+/// Parses, validates and plans `source` (named `file` in diagnostics). Never panics.
+pub fn analyze(file: &str, source: &str) -> Analysis {
+    let mut items = Vec::new();
+    let mut model = None;
+    let mut plan = None;
+    match syntax::parse(source) {
+        Err(e) => {
+            // A repeated table or key is a TOML error; it gets the duplicate-name code.
+            let d = match e.message.lines().find(|l| l.contains("duplicate key")) {
+                Some(line) => Diagnostic::new(
+                    Code::DuplicateName,
+                    e.span,
+                    line.trim().replace("`\"", "`").replace("\"`", "`"),
+                )
+                .help("every type, module, node and topic name must be unique"),
+                None => Diagnostic::new(Code::TomlSyntax, e.span.clone(), e.first_line()),
+            };
+            items.push(d);
+        }
+        Ok(root) => {
+            model = validate::validate(&root, &mut items);
+            if let Some(m) = &model {
+                plan = plan::build(m, file, &mut items);
+            }
+            if !items.is_empty() {
+                plan = None;
+            }
+        }
+    }
+    Analysis {
+        model,
+        plan,
+        diagnostics: Diagnostics {
+            file: file.to_string(),
+            source: source.to_string(),
+            items,
+        },
+    }
+}
+
+/// Entry point for users of the model.
+pub struct Robot;
+
+impl Robot {
+    /// Reads and plans a robot.toml; diagnostics name the file as given.
+    pub fn load(path: impl AsRef<Path>) -> Result<Plan, Diagnostics> {
+        let path = path.as_ref();
+        let file = path.display().to_string();
+        match std::fs::read_to_string(path) {
+            Ok(source) => Robot::parse(&file, &source),
+            Err(e) => Err(Diagnostics {
+                file: file.clone(),
+                source: String::new(),
+                items: vec![Diagnostic::new(
+                    Code::Io,
+                    None,
+                    format!("cannot read `{file}`: {e}"),
+                )],
+            }),
+        }
+    }
+
+    /// Plans robot.toml text.
+    pub fn parse(file: &str, source: &str) -> Result<Plan, Diagnostics> {
+        let a = analyze(file, source);
+        match a.plan {
+            Some(plan) if a.diagnostics.is_empty() => Ok(plan),
+            _ => Err(a.diagnostics),
+        }
+    }
+}

@@ -57,10 +57,22 @@ pub struct Entry {
     pub value: Node,
 }
 
+impl SyntaxError {
+    /// The first line of the message.
+    pub fn first_line(&self) -> String {
+        self.message
+            .lines()
+            .next()
+            .unwrap_or("invalid TOML")
+            .trim()
+            .to_string()
+    }
+}
+
 /// A TOML syntax error.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SyntaxError {
-    /// toml_edit's message (first line).
+    /// toml_edit's message (may span several lines).
     pub message: String,
     /// Where.
     pub span: Option<Span>,
@@ -69,10 +81,13 @@ pub struct SyntaxError {
 /// Parses a whole document; the root is a `Kind::Table`.
 pub fn parse(source: &str) -> Result<Node, SyntaxError> {
     let doc = ImDocument::parse(source).map_err(|e| SyntaxError {
-        message: e.message().lines().next().unwrap_or("invalid TOML").trim().to_string(),
+        message: e.message().trim().to_string(),
         span: e.span(),
     })?;
-    Ok(Node { span: Some(0..source.len()), kind: Kind::Table(table_entries(doc.as_table())) })
+    Ok(Node {
+        span: Some(0..source.len()),
+        kind: Kind::Table(table_entries(doc.as_table())),
+    })
 }
 
 fn table_entries(t: &Table) -> Vec<Entry> {
@@ -83,7 +98,11 @@ fn table_entries(t: &Table) -> Vec<Entry> {
             if value.span.is_none() {
                 value.span.clone_from(&key_span);
             }
-            Entry { key: k.to_string(), key_span, value }
+            Entry {
+                key: k.to_string(),
+                key_span,
+                value,
+            }
         })
         .collect()
 }
@@ -91,14 +110,25 @@ fn table_entries(t: &Table) -> Vec<Entry> {
 fn item_node(item: &Item) -> Node {
     match item {
         Item::Value(v) => value_node(v),
-        Item::Table(t) => Node { span: t.span(), kind: Kind::Table(table_entries(t)) },
+        Item::Table(t) => Node {
+            span: t.span(),
+            kind: Kind::Table(table_entries(t)),
+        },
         Item::ArrayOfTables(a) => Node {
             span: a.span(),
             kind: Kind::Array(
-                a.iter().map(|t| Node { span: t.span(), kind: Kind::Table(table_entries(t)) }).collect(),
+                a.iter()
+                    .map(|t| Node {
+                        span: t.span(),
+                        kind: Kind::Table(table_entries(t)),
+                    })
+                    .collect(),
             ),
         },
-        Item::None => Node { span: None, kind: Kind::Table(Vec::new()) },
+        Item::None => Node {
+            span: None,
+            kind: Kind::Table(Vec::new()),
+        },
     }
 }
 
@@ -114,16 +144,23 @@ fn value_node(v: &Value) -> Node {
             t.iter()
                 .map(|(k, val)| {
                     let key_span = t.get_key_value(k).and_then(|(key, _)| key.span());
-                    let mut value = item_node(val);
+                    let mut value = value_node(val);
                     if value.span.is_none() {
                         value.span.clone_from(&key_span);
                     }
-                    Entry { key: k.to_string(), key_span, value }
+                    Entry {
+                        key: k.to_string(),
+                        key_span,
+                        value,
+                    }
                 })
                 .collect(),
         ),
     };
-    Node { span: v.span(), kind }
+    Node {
+        span: v.span(),
+        kind,
+    }
 }
 
 #[cfg(test)]
@@ -134,14 +171,24 @@ mod tests {
     fn keeps_key_and_value_spans() {
         let src = "[topics.speed]\nrate = \"200Hz\"\nsubs = [{ node = \"a\" }]\n";
         let root = parse(src).unwrap();
-        let Kind::Table(top) = &root.kind else { panic!() };
-        let Kind::Table(topics) = &top[0].value.kind else { panic!() };
+        let Kind::Table(top) = &root.kind else {
+            panic!()
+        };
+        let Kind::Table(topics) = &top[0].value.kind else {
+            panic!()
+        };
         assert_eq!(topics[0].key, "speed");
-        let Kind::Table(speed) = &topics[0].value.kind else { panic!() };
+        let Kind::Table(speed) = &topics[0].value.kind else {
+            panic!()
+        };
         assert_eq!(&src[speed[0].key_span.clone().unwrap()], "rate");
         assert_eq!(&src[speed[0].value.span.clone().unwrap()], "\"200Hz\"");
-        let Kind::Array(subs) = &speed[1].value.kind else { panic!() };
-        let Kind::Table(sub) = &subs[0].kind else { panic!() };
+        let Kind::Array(subs) = &speed[1].value.kind else {
+            panic!()
+        };
+        let Kind::Table(sub) = &subs[0].kind else {
+            panic!()
+        };
         assert_eq!(&src[sub[0].value.span.clone().unwrap()], "\"a\"");
     }
 

@@ -5,9 +5,12 @@
 /// Splits "12.5 ms" into (12.5, "ms"); the number is plain decimal (no sign, no exponent).
 fn split_number(text: &str) -> Option<(f64, &str)> {
     let t = text.trim();
-    let end = t.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(t.len());
+    let end = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
     let (num, unit) = t.split_at(end);
-    if num.is_empty() || num.starts_with('.') || num.ends_with('.') || num.matches('.').count() > 1 {
+    if num.is_empty() || num.starts_with('.') || num.ends_with('.') || num.matches('.').count() > 1
+    {
         return None;
     }
     let v: f64 = num.parse().ok()?;
@@ -16,7 +19,11 @@ fn split_number(text: &str) -> Option<(f64, &str)> {
 
 /// A duration in ns (rounded to the nearest ns); must be > 0 and at most 1000 s.
 pub fn duration_ns(text: &str) -> Result<u64, String> {
-    let bad = || format!("`{text}` is not a duration: write a number and a unit (s, ms, us, ns), e.g. \"10ms\"");
+    let bad = || {
+        format!(
+            "`{text}` is not a duration: write a number and a unit (s, ms, us, ns), e.g. \"10ms\""
+        )
+    };
     let (v, unit) = split_number(text).ok_or_else(bad)?;
     let scale = match unit {
         "s" => 1e9,
@@ -27,14 +34,18 @@ pub fn duration_ns(text: &str) -> Result<u64, String> {
     };
     let ns = (v * scale).round();
     if ns < 1.0 || ns > 1e12 {
-        return Err(format!("duration `{text}` is out of range (1 ns to 1000 s)"));
+        return Err(format!(
+            "duration `{text}` is out of range (1 ns to 1000 s)"
+        ));
     }
     Ok(ns as u64)
 }
 
 /// A frequency in Hz; must be > 0 and at most 1 MHz.
 pub fn frequency_hz(text: &str) -> Result<f64, String> {
-    let bad = || format!("`{text}` is not a frequency: write a number and a unit (Hz, kHz), e.g. \"200Hz\"");
+    let bad = || {
+        format!("`{text}` is not a frequency: write a number and a unit (Hz, kHz), e.g. \"200Hz\"")
+    };
     let (v, unit) = split_number(text).ok_or_else(bad)?;
     let scale = match unit {
         "Hz" => 1.0,
@@ -44,14 +55,17 @@ pub fn frequency_hz(text: &str) -> Result<f64, String> {
     };
     let hz = v * scale;
     if !(hz > 0.0 && hz <= 1e6) {
-        return Err(format!("frequency `{text}` is out of range (above 0, at most 1 MHz)"));
+        return Err(format!(
+            "frequency `{text}` is out of range (above 0, at most 1 MHz)"
+        ));
     }
     Ok(hz)
 }
 
 /// A CAN bit rate in bit/s: "1Mbit/s", "500kbit/s", "250kbps" (integers are taken as bit/s).
 pub fn bitrate(text: &str) -> Result<u64, String> {
-    let bad = || format!("`{text}` is not a bit rate: write e.g. \"1Mbit/s\", \"500kbit/s\" or 1000000");
+    let bad =
+        || format!("`{text}` is not a bit rate: write e.g. \"1Mbit/s\", \"500kbit/s\" or 1000000");
     let (v, unit) = split_number(text).ok_or_else(bad)?;
     let scale = match unit {
         "bit/s" | "bps" | "" => 1.0,

@@ -9,7 +9,11 @@ pub(crate) struct Ring<const Q: usize> {
 }
 
 impl<const Q: usize> Ring<Q> {
-    pub(crate) const EMPTY: Self = Ring { buf: [0; Q], head: 0, len: 0 };
+    pub(crate) const EMPTY: Self = Ring {
+        buf: [0; Q],
+        head: 0,
+        len: 0,
+    };
 
     pub(crate) fn len(&self) -> usize {
         usize::from(self.len)
@@ -70,7 +74,10 @@ mod tests {
         assert!(!r.push(4), "full ring refuses");
         assert_eq!(r.pop(), Some(1));
         assert!(r.push(4));
-        assert_eq!([r.pop(), r.pop(), r.pop(), r.pop()], [Some(2), Some(3), Some(4), None]);
+        assert_eq!(
+            [r.pop(), r.pop(), r.pop(), r.pop()],
+            [Some(2), Some(3), Some(4), None]
+        );
         assert_eq!(r.len(), 0);
     }
 }

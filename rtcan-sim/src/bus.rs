@@ -42,9 +42,21 @@ pub trait Module {
     /// The timer fired.
     fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos>;
     /// The receive interrupt read `frame` from a FIFO; `sof` is its hardware timestamp.
-    fn rx(&mut self, frame: &Frame, sof: Nanos, now: Nanos, can: &mut SimController) -> Option<Nanos>;
+    fn rx(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos>;
     /// The transmit interrupt reported `mailbox` done.
-    fn tx_done(&mut self, mailbox: Mailbox, result: TxResult, now: Nanos, can: &mut SimController) -> Option<Nanos>;
+    fn tx_done(
+        &mut self,
+        mailbox: Mailbox,
+        result: TxResult,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos>;
     /// A receive FIFO overran.
     fn rx_overrun(&mut self, now: Nanos);
 }
@@ -64,7 +76,12 @@ pub struct NodeSetup {
 
 impl Default for NodeSetup {
     fn default() -> Self {
-        NodeSetup { clock: NodeClock::default(), irq_latency_ns: 0, nart: false, filter: Filter::AcceptAll }
+        NodeSetup {
+            clock: NodeClock::default(),
+            irq_latency_ns: 0,
+            nart: false,
+            filter: Filter::AcceptAll,
+        }
     }
 }
 
@@ -111,8 +128,16 @@ enum Ev {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
     Idle,
-    Arbitrating { sof: Nanos },
-    Busy { node: usize, mb: usize, sof: Nanos, frame: Frame, ok: bool },
+    Arbitrating {
+        sof: Nanos,
+    },
+    Busy {
+        node: usize,
+        mb: usize,
+        sof: Nanos,
+        frame: Frame,
+        ok: bool,
+    },
 }
 
 struct Node<M> {
@@ -180,7 +205,12 @@ impl<M: Module> Bus<M> {
     /// Attaches a node; returns its index.
     pub fn add_node(&mut self, module: M, setup: NodeSetup) -> usize {
         let can = SimController::new(setup.nart, setup.filter.clone());
-        self.nodes.push(Node { module, can, setup, wake_gen: 0 });
+        self.nodes.push(Node {
+            module,
+            can,
+            setup,
+            wake_gen: 0,
+        });
         self.nodes.len() - 1
     }
 
@@ -226,7 +256,11 @@ impl<M: Module> Bus<M> {
 
     /// Runs an arbitrary action on node `i` at the current time, as if from its own
     /// code (e.g. a test loading a mailbox), with the usual bookkeeping afterwards.
-    pub fn with_node(&mut self, i: usize, f: impl FnOnce(&mut M, Nanos, &mut SimController) -> Option<Nanos>) {
+    pub fn with_node(
+        &mut self,
+        i: usize,
+        f: impl FnOnce(&mut M, Nanos, &mut SimController) -> Option<Nanos>,
+    ) {
         self.callback(i, f);
     }
 
@@ -235,9 +269,15 @@ impl<M: Module> Bus<M> {
         self.queue.push(Reverse((t, self.seq, ev)));
     }
 
-    fn callback(&mut self, i: usize, f: impl FnOnce(&mut M, Nanos, &mut SimController) -> Option<Nanos>) {
+    fn callback(
+        &mut self,
+        i: usize,
+        f: impl FnOnce(&mut M, Nanos, &mut SimController) -> Option<Nanos>,
+    ) {
         let now = self.now;
-        let Some(node) = self.nodes.get_mut(i) else { return };
+        let Some(node) = self.nodes.get_mut(i) else {
+            return;
+        };
         node.can.now = now;
         let local = node.setup.clock.local(now);
         let next = f(&mut node.module, local, &mut node.can);
@@ -250,7 +290,14 @@ impl<M: Module> Bus<M> {
             self.push(t, Ev::Wake { node: i, gen });
         }
         for (mb, r) in reports {
-            self.push(now + lat, Ev::TxIrq { node: i, mb: mb.0, result: result_code(r) });
+            self.push(
+                now + lat,
+                Ev::TxIrq {
+                    node: i,
+                    mb: mb.0,
+                    result: result_code(r),
+                },
+            );
         }
         self.maybe_start_arbitration();
     }
@@ -301,18 +348,26 @@ impl<M: Module> Bus<M> {
             }
             Ev::RxIrq { node, fifo } => self.rx_irq(node, fifo),
             Ev::TxIrq { node, mb, result } => {
-                self.callback(node, |m, now, can| m.tx_done(Mailbox(mb), code_result(result), now, can));
+                self.callback(node, |m, now, can| {
+                    m.tx_done(Mailbox(mb), code_result(result), now, can)
+                });
             }
         }
     }
 
     fn arbitrate(&mut self) {
-        let State::Arbitrating { sof } = self.state else { return };
+        let State::Arbitrating { sof } = self.state else {
+            return;
+        };
         let offers: Vec<(u32, usize, usize)> = self
             .nodes
             .iter()
             .enumerate()
-            .filter_map(|(n, node)| node.can.best_pending().map(|(mb, p)| (p.frame.id().raw(), n, mb)))
+            .filter_map(|(n, node)| {
+                node.can
+                    .best_pending()
+                    .map(|(mb, p)| (p.frame.id().raw(), n, mb))
+            })
             .collect();
         let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
             // Everything was aborted during the SOF bit.
@@ -327,16 +382,29 @@ impl<M: Module> Bus<M> {
         }
         let lat_now = self.now;
         for &(_, n, mb) in offers.iter().filter(|o| o.1 != win_node) {
-            let Some(node) = self.nodes.get_mut(n) else { continue };
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
             if node.can.nart {
                 node.can.take_mailbox(mb);
                 node.can.stats.tx_failed += 1;
                 let t = lat_now + node.setup.irq_latency_ns;
-                self.push(t, Ev::TxIrq { node: n, mb: mb as u8, result: result_code(TxResult::Failed) });
+                self.push(
+                    t,
+                    Ev::TxIrq {
+                        node: n,
+                        mb: mb as u8,
+                        result: result_code(TxResult::Failed),
+                    },
+                );
             }
         }
-        let Some(node) = self.nodes.get_mut(win_node) else { return };
-        let Some(p) = node.can.mailbox(win_mb) else { return };
+        let Some(node) = self.nodes.get_mut(win_node) else {
+            return;
+        };
+        let Some(p) = node.can.mailbox(win_mb) else {
+            return;
+        };
         node.can.on_wire = Some(win_mb);
         let bits = exact_bits(&p.frame);
         let body = bits - INTERMISSION_BITS;
@@ -350,18 +418,39 @@ impl<M: Module> Bus<M> {
                 end_bits = k + ERROR_FRAME_BITS;
             }
         }
-        self.state = State::Busy { node: win_node, mb: win_mb, sof, frame: p.frame, ok };
+        self.state = State::Busy {
+            node: win_node,
+            mb: win_mb,
+            sof,
+            frame: p.frame,
+            ok,
+        };
         let t = sof + bits_to_ns(end_bits, self.bitrate);
         self.push(t, Ev::FrameEnd);
     }
 
     fn frame_end(&mut self) {
-        let State::Busy { node: tx, mb, sof, frame, ok } = self.state else { return };
+        let State::Busy {
+            node: tx,
+            mb,
+            sof,
+            frame,
+            ok,
+        } = self.state
+        else {
+            return;
+        };
         let now = self.now;
         let ifs = bits_to_ns(INTERMISSION_BITS, self.bitrate);
         self.stats.busy_ns += now - sof + ifs;
         if self.record_wire {
-            self.wire.push(WireFrame { sof, end: now, node: tx, frame, ok });
+            self.wire.push(WireFrame {
+                sof,
+                end: now,
+                node: tx,
+                frame,
+                ok,
+            });
         }
         let mut irqs = Vec::new();
         if let Some(node) = self.nodes.get_mut(tx) {
@@ -382,16 +471,27 @@ impl<M: Module> Bus<M> {
             };
             if let Some(r) = result {
                 node.can.take_mailbox(mb);
-                irqs.push((lat, Ev::TxIrq { node: tx, mb: mb as u8, result: result_code(r) }));
+                irqs.push((
+                    lat,
+                    Ev::TxIrq {
+                        node: tx,
+                        mb: mb as u8,
+                        result: result_code(r),
+                    },
+                ));
             }
         }
         if ok {
             self.stats.frames_ok += 1;
             let mut overruns = Vec::new();
             for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
-                let Some(fifo) = node.can.filter.fifo_for(frame.id().raw()) else { continue };
-                let (Some(q), Some(pending)) = (node.can.fifos.get_mut(fifo), node.can.rx_irq_pending.get_mut(fifo))
-                else {
+                let Some(fifo) = node.can.filter.fifo_for(frame.id().raw()) else {
+                    continue;
+                };
+                let (Some(q), Some(pending)) = (
+                    node.can.fifos.get_mut(fifo),
+                    node.can.rx_irq_pending.get_mut(fifo),
+                ) else {
                     continue;
                 };
                 if q.len() >= RX_FIFO_DEPTH {
@@ -424,12 +524,19 @@ impl<M: Module> Bus<M> {
     }
 
     fn rx_irq(&mut self, n: usize, fifo: usize) {
-        if let Some(p) = self.nodes.get_mut(n).and_then(|node| node.can.rx_irq_pending.get_mut(fifo)) {
+        if let Some(p) = self
+            .nodes
+            .get_mut(n)
+            .and_then(|node| node.can.rx_irq_pending.get_mut(fifo))
+        {
             *p = false;
         }
         // The driver's ISR reads until the FIFO is empty (frames arriving meanwhile too).
-        while let Some((frame, sof)) =
-            self.nodes.get_mut(n).and_then(|node| node.can.fifos.get_mut(fifo)).and_then(|q| q.pop_front())
+        while let Some((frame, sof)) = self
+            .nodes
+            .get_mut(n)
+            .and_then(|node| node.can.fifos.get_mut(fifo))
+            .and_then(|q| q.pop_front())
         {
             self.callback(n, |m, now, can| m.rx(&frame, sof, now, can));
         }

@@ -142,7 +142,10 @@ impl Controller for SimController {
         let mb = usize::from(mailbox.0);
         match self.mailboxes.get_mut(mb) {
             Some(slot @ None) => {
-                *slot = Some(Pending { frame: *frame, loaded_at: self.now });
+                *slot = Some(Pending {
+                    frame: *frame,
+                    loaded_at: self.now,
+                });
                 self.stats.loads += 1;
                 if let Some(f) = self.abort_requested.get_mut(mb) {
                     *f = false;

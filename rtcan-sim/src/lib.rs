@@ -1,12 +1,36 @@
 //! Deterministic discrete-event simulator of robots on a CAN bus: every simulated module
 //! runs the same `rtcan_core::Engine` (and middleware) as its firmware, through the
 //! same driver boundary (`rtcan_core::Controller`), on a bit-accurate bus.
-#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic))]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::indexing_slicing,
+        clippy::panic
+    )
+)]
 
 pub mod bus;
+pub mod candump;
 pub mod clock;
+pub mod compare;
 pub mod controller;
+pub mod decode;
+pub mod fixed;
+pub mod ideal;
+pub mod metrics;
+pub mod paper;
+pub mod plant;
+pub mod policy;
+pub mod report;
 pub mod rng;
+pub mod robot;
+pub mod run;
+pub mod slots;
+pub mod svg;
+pub mod tables;
+pub mod traffic;
 
 pub use bus::{Bus, Module, NodeSetup, WireFrame};
 pub use clock::NodeClock;

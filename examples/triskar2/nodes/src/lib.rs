@@ -1,4 +1,13 @@
 #![cfg_attr(not(test), no_std)]
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::indexing_slicing,
+        clippy::panic
+    )
+)]
 //! Triskar2 nodes (R2P paper §5): the robot's control logic as plain structs.
 //!
 //! Every node is pure logic: it is given the time (`now_ns`, nanoseconds on the caller's
@@ -37,7 +46,15 @@ pub use motor::{MotorConfig, MotorNode, MotorOutput, MotorState};
 pub use obstacle::{AvoidanceConfig, AvoidanceOutput, ObstacleAvoidance, SENSOR_DIRECTIONS};
 pub use odometry::{OdometryNode, OdometryOutput, Pose};
 pub use pid::{Pid, PidGains};
-pub use proximity::{ProximityConfig, ProximityNode, ProximityOutput, SENSOR_COUNT};
+pub use proximity::{
+    m_to_mm, mm_to_m, ProximityConfig, ProximityNode, ProximityOutput, SENSOR_COUNT,
+};
 
 /// Nanoseconds on the caller's clock (same type as `rtcan_core::time::Nanos`).
 pub type Nanos = u64;
+
+/// `x` limited to `lo..=hi`. Unlike `f32::clamp` it cannot panic on a bad configuration
+/// (`lo > hi` gives `hi`; a NaN bound is ignored).
+pub(crate) fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    x.max(lo).min(hi)
+}

@@ -1,5 +1,6 @@
 //! Motor controller node: one per DC-motor module, PID on wheel speed at 200 Hz.
 
+use crate::clamp;
 use crate::pid::{Pid, PidGains};
 use crate::step_clock::StepClock;
 use crate::Nanos;
@@ -85,7 +86,7 @@ impl MotorNode {
     pub fn on_setpoint(&mut self, now_ns: Nanos, speed_rad_s: f32) {
         if speed_rad_s.is_finite() {
             let max = self.config.max_speed_rad_s;
-            self.setpoint = Some((now_ns, speed_rad_s.clamp(-max, max)));
+            self.setpoint = Some((now_ns, clamp(speed_rad_s, -max, max)));
         }
     }
 

@@ -1,5 +1,7 @@
 //! PID controller with output saturation and anti-windup.
 
+use crate::clamp;
+
 /// Gains and output limits. The integral and derivative gains are per second
 /// (`ki` multiplies the error integrated over seconds, `kd` the rate in units/s).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -15,10 +17,11 @@ pub struct PidGains {
 ///
 /// * The derivative acts on the measurement, not the error, so a setpoint step does
 ///   not kick the output.
-/// * Anti-windup by conditional integration: while the output is saturated, error that
-///   would push it further into saturation is not integrated, and the integral term is
-///   itself clamped to the output range. The controller therefore leaves saturation as
-///   soon as the error changes sign, instead of after unwinding a huge integral.
+/// * Anti-windup by clamping: the integral only grows until P + I + D reaches the output
+///   limit (so a saturated output sits exactly at the limit), does not grow while P and
+///   D alone saturate, and is itself bounded by the output range. The controller leaves
+///   saturation as soon as the error changes sign, instead of after unwinding a huge
+///   integral.
 /// * A non-finite setpoint or measurement (a corrupt message) yields output 0 and leaves
 ///   the state untouched.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,14 +70,13 @@ impl Pid {
         };
         self.prev_measured = Some(measured);
 
-        let candidate = (self.i_term + g.ki * error * dt_s).clamp(g.out_min, g.out_max);
-        let unsaturated = p + candidate + d;
-        let winding_up = (unsaturated > g.out_max && error > 0.0)
-            || (unsaturated < g.out_min && error < 0.0);
-        if !winding_up {
-            self.i_term = candidate;
-        }
-        (p + self.i_term + d).clamp(g.out_min, g.out_max)
+        // The integral may grow only up to the headroom P and D leave below the limit,
+        // and not at all while P and D alone saturate the output.
+        let upper = self.i_term.max(g.out_max - p - d);
+        let lower = self.i_term.min(g.out_min - p - d);
+        let candidate = self.i_term + g.ki * error * dt_s;
+        self.i_term = clamp(clamp(candidate, lower, upper), g.out_min, g.out_max);
+        clamp(p + self.i_term + d, g.out_min, g.out_max)
     }
 }
 
@@ -129,7 +131,37 @@ mod tests {
         assert!(pid.integral() <= 1.0, "{}", pid.integral());
         // Once the measurement overshoots, the output leaves saturation on the first step.
         let out = pid.step(10.0, 10.5, 0.01);
-        assert!(out < 1.0, "still saturated after the error changed sign: {out}");
+        assert!(
+            out < 1.0,
+            "still saturated after the error changed sign: {out}"
+        );
+    }
+
+    #[test]
+    fn integral_fills_exactly_the_headroom_to_the_limit() {
+        let mut pid = Pid::new(PI_GAINS);
+        // P = 0.5 * 1.2 = 0.6; the integral grows to 0.4 and stops there: output 1.0.
+        for _ in 0..1000 {
+            pid.step(1.2, 0.0, 0.01);
+        }
+        assert!((pid.integral() - 0.4).abs() < 1e-6, "{}", pid.integral());
+        assert_eq!(pid.step(1.2, 0.0, 0.01), 1.0);
+        // Same on the negative side.
+        let mut pid = Pid::new(PI_GAINS);
+        for _ in 0..1000 {
+            pid.step(-1.2, 0.0, 0.01);
+        }
+        assert!((pid.integral() + 0.4).abs() < 1e-6, "{}", pid.integral());
+    }
+
+    #[test]
+    fn inverted_limits_do_not_panic() {
+        let mut pid = Pid::new(PidGains {
+            out_min: 1.0,
+            out_max: -1.0,
+            ..PI_GAINS
+        });
+        assert_eq!(pid.step(1.0, 0.0, 0.01), -1.0);
     }
 
     #[test]

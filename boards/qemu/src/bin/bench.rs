@@ -1,0 +1,137 @@
+//! Instruction-count benchmarks on the Cortex-M3 (run under QEMU with
+//! `-icount shift=10,sleep=off`, see boards/run-qemu.sh). Prints one `BENCH` line per
+//! figure: worst case (max) and mean instructions over every call in a 3-node, 60-cycle
+//! run with HRT, fragmented HRT, SRT, fragmented SRT, NRT and heartbeat traffic.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+use cortex_m_rt::entry;
+use cortex_m_semihosting::hprintln;
+use lm3s6965 as _;
+use rtcan_board_common::WideClock;
+use rtcan_board_qemu::fixtures::{TestHost, MASTER, M_ARENA, SLAVE1, SLAVE2};
+use rtcan_board_qemu::meter::{KindMeter, Stat, SysTickMeter};
+use rtcan_board_qemu::{check, pass, Node, SoftBus, SoftCan, Station};
+use rtcan_core::driver::{Controller, Mailbox};
+use rtcan_core::engine::Engine;
+use rtcan_core::fragment::{crc16, fragment_data};
+use rtcan_core::frame::Frame;
+use rtcan_core::id::{CanId, MsgId};
+
+const CYCLE: u64 = 2_000_000;
+
+fn report(name: &str, s: &Stat) {
+    hprintln!(
+        "BENCH {} max {} mean {} samples {}",
+        name,
+        s.max,
+        s.mean(),
+        s.n
+    );
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        rtcan_board_qemu::fail()
+    };
+    let mut meter = SysTickMeter::new(cp.SYST);
+    hprintln!(
+        "CALIB ticks_per_1000_instructions {}",
+        meter.ticks_per_kinsn()
+    );
+
+    // Sanity of the method: a known block of 100 NOPs.
+    let nops = meter.instructions(&mut || unsafe {
+        core::arch::asm!(
+            ".rept 100",
+            "nop",
+            ".endr",
+            options(nomem, nostack, preserves_flags)
+        );
+    });
+    hprintln!("BENCH nop100 max {} mean {} samples 1", nops, nops);
+    check!((97..=105).contains(&nops), "100 NOPs measured as {}", nops);
+
+    // Trivial board-side function: extending the 16-bit timer reading.
+    let clk = WideClock::new();
+    let mut s = Stat::default();
+    for c in [0u16, 0x7FFF, 0x8000, 0xFFFF] {
+        s.add(meter.instructions(&mut || {
+            black_box(clk.ticks(black_box(c)));
+        }));
+    }
+    report("wide_clock_ticks", &s);
+
+    // Loading one TX frame: fragment bytes + identifier + frame + mailbox write, for
+    // every fragment of a 30-byte message (the engine's per-frame transmit work).
+    let payload = [0x5Au8; 30];
+    let crc = crc16(&payload);
+    let mut can = SoftCan::new();
+    let mut load = Stat::default();
+    for counter in (0..4u8).rev() {
+        load.add(meter.instructions(&mut || {
+            let mut out = [0u8; 8];
+            let dlc = fragment_data(black_box(&payload), crc, counter, &mut out);
+            if let Some(f) =
+                CanId::new(17, MsgId(0x143), counter).and_then(|id| Frame::from_parts(id, dlc, out))
+            {
+                can.load(Mailbox(1), &f);
+            }
+        }));
+        can.abort(Mailbox(1));
+        let _ = can.take_completion();
+    }
+    report("load_tx_frame", &load);
+
+    // The engine in a running system.
+    let mut km = KindMeter {
+        meter,
+        poll: Stat::default(),
+        rx: Stat::default(),
+        tx_done: Stat::default(),
+    };
+    let (mut hm, mut h1, mut h2) = (
+        TestHost::<1, 4>::new(&MASTER),
+        TestHost::<2, 1>::new(&SLAVE1),
+        TestHost::<2, 2>::new(&SLAVE2),
+    );
+    hm.verify = false;
+    h1.verify = false;
+    h2.verify = false;
+    let mut m = Station::new(Engine::<4, M_ARENA, 8>::new(MASTER, 0), hm, 0);
+    let mut s1 = Station::new(Engine::<1, 8, 8>::new(SLAVE1, 1_000_001), h1, 1_000_001);
+    let mut s2 = Station::new(Engine::<2, 14, 8>::new(SLAVE2, 777_777), h2, 777_777);
+    let mut bus = SoftBus::new(1_000_000);
+    let mut t = 0;
+    while t < 60 * CYCLE {
+        t += CYCLE / 2;
+        bus.run_until(&mut [&mut m as &mut dyn Node, &mut s1, &mut s2], t, &mut km);
+        if !(s1.engine.is_synced() && s2.engine.is_synced()) {
+            continue;
+        }
+        if let Some(tok) = m.host.next_message(0) {
+            let _ = m.submit(t, 0, tok);
+        }
+        if t % (2 * CYCLE) == 0 {
+            if let Some(tok) = s1.host.next_message(1) {
+                let _ = s1.submit(t, 1, tok);
+            }
+        }
+        if t % (5 * CYCLE) == 0 {
+            if let Some(tok) = s2.host.next_message(1) {
+                let _ = s2.submit(t, 1, tok);
+            }
+        }
+    }
+    check!(
+        m.host.rx[1].count >= 55,
+        "scan received {}",
+        m.host.rx[1].count
+    );
+    report("engine_poll_slot_boundary", &km.poll);
+    report("engine_on_rx", &km.rx);
+    report("engine_on_tx_done", &km.tx_done);
+    pass()
+}

@@ -1,0 +1,59 @@
+//! `rtcan check robot.toml [--json]`: the same analysis as the build (rtcan-model), printed
+//! for a person (plan, load, filters, calendar) or as JSON (docs/ROBOT_TOML.md).
+use rtcan_model::{analyze, report, Analysis, Code, Diagnostic, Diagnostics, Status};
+
+/// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage.
+pub fn run(args: &[String]) -> i32 {
+    let mut json = false;
+    let mut path: Option<&str> = None;
+    for a in args {
+        match a.as_str() {
+            "--json" => json = true,
+            "-h" | "--help" => {
+                println!("usage: rtcan check <robot.toml> [--json]");
+                return 0;
+            }
+            s if s.starts_with('-') => {
+                eprintln!("error: unknown option `{s}` (usage: rtcan check <robot.toml> [--json])");
+                return 2;
+            }
+            s if path.is_none() => path = Some(s),
+            s => {
+                eprintln!("error: unexpected argument `{s}` (one robot.toml at a time)");
+                return 2;
+            }
+        }
+    }
+    let Some(path) = path else {
+        eprintln!("error: missing robot.toml (usage: rtcan check <robot.toml> [--json])");
+        return 2;
+    };
+    let analysis = match std::fs::read_to_string(path) {
+        Ok(source) => analyze(path, &source),
+        Err(e) => Analysis {
+            model: None,
+            plan: None,
+            diagnostics: Diagnostics {
+                file: path.to_string(),
+                source: String::new(),
+                items: vec![Diagnostic::new(
+                    Code::Io,
+                    None,
+                    format!("cannot read `{path}`: {e}"),
+                )],
+            },
+        },
+    };
+    let status = analysis.status();
+    if !analysis.diagnostics.is_empty() {
+        eprint!("{}", analysis.diagnostics.render());
+    }
+    if json {
+        println!("{}", report::json_text(&analysis));
+    } else if let Some(plan) = &analysis.plan {
+        print!("{}", report::text(plan));
+    } else if status == Status::NotAdmissible {
+        println!("{path}: not admissible");
+    }
+    status.exit_code()
+}

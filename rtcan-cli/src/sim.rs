@@ -1,0 +1,221 @@
+//! `rtcan sim`: runs a scenario on the simulated bus and reports (docs/SIM.md).
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rtcan_core::engine::Policy;
+use rtcan_sim::compare::{paper_comparison, paper_sweep, Comparison};
+use rtcan_sim::policy::PolicyKind;
+use rtcan_sim::run::{run_engine, Run, Scenario, SimConfig};
+use rtcan_sim::{candump, paper, report, robot, svg};
+
+const USAGE: &str = "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N] [--seed S]
+                 [--load X] [--ber P] [--json] [--out DIR] [--sweep]";
+
+struct Args {
+    robot: Option<PathBuf>,
+    scenario: Option<String>,
+    cfg: SimConfig,
+    json: bool,
+    out: Option<PathBuf>,
+    sweep: bool,
+}
+
+fn parse(args: &[String]) -> Result<Args, String> {
+    let mut a = Args { robot: None, scenario: None, cfg: SimConfig::default(), json: false, out: None, sweep: false };
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
+        match arg.as_str() {
+            "--scenario" => a.scenario = Some(value("--scenario")?),
+            "--seconds" => a.cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?,
+            "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
+            "--load" => a.cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
+            "--ber" => a.cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
+            "--out" => a.out = Some(PathBuf::from(value("--out")?)),
+            "--json" => a.json = true,
+            "--sweep" => a.sweep = true,
+            s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
+            s => a.robot = Some(PathBuf::from(s)),
+        }
+    }
+    if !(a.cfg.seconds > 0.0 && a.cfg.seconds <= 100_000.0) {
+        return Err("--seconds must be in (0, 100000]".into());
+    }
+    if !(a.cfg.load > 0.0 && a.cfg.load <= 100.0) {
+        return Err("--load must be in (0, 100]".into());
+    }
+    if !(0.0..1.0).contains(&a.cfg.bit_error_rate) {
+        return Err("--ber must be in [0, 1)".into());
+    }
+    Ok(a)
+}
+
+/// Runs `rtcan sim`; returns the exit code.
+pub fn run(args: &[String]) -> i32 {
+    let a = match parse(args) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: {e}\n{USAGE}");
+            return 2;
+        }
+    };
+    let result = match (a.scenario.as_deref(), &a.robot) {
+        (Some("triskar2"), _) => Err(
+            "the triskar2 scenario needs the plant models and Triskar2 node code, which are not in the simulator yet"
+                .to_string(),
+        ),
+        (Some("rtcan-paper"), _) | (None, None) => run_paper(&a),
+        (Some(file), _) => run_user_file(&a, Path::new(file)),
+        (None, Some(robot)) => run_robot(&a, robot, &[]),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            1
+        }
+    }
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let p = dir.join(name);
+    std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+fn progress(done: usize, total: usize) {
+    let width = 30;
+    let filled = done * width / total.max(1);
+    eprint!("\r[{}{}] {done}/{total}", "#".repeat(filled), " ".repeat(width - filled));
+    if done == total {
+        eprintln!();
+    }
+}
+
+fn speed_line(sim_s: f64, wall: f64) -> String {
+    format!("speed: {sim_s:.1} s simulated in {wall:.3} s wall = {:.0}x real time (one core)", sim_s / wall.max(1e-9))
+}
+
+fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
+    write(dir, "can0.log", &candump::log(&run.wire, "can0"))?;
+    write(dir, &format!("hrt-jitter-{}.svg", run.policy), &svg::hrt_jitter(run))?;
+    write(dir, &format!("srt-latency-{}.svg", run.policy), &svg::srt_latency(run))?;
+    if let Some(bus) = sc.bus() {
+        let rows: Vec<(String, Vec<(u32, String)>)> = sc
+            .tables
+            .iter()
+            .enumerate()
+            .map(|(n, t)| {
+                let cells = t
+                    .calendar
+                    .iter()
+                    .filter(|e| e.slot < u32::from(bus.slots_per_cycle))
+                    .map(|e| {
+                        let label = sc.topics.iter().find(|i| i.node == n && i.tx == e.tx).map_or("?", |i| i.label.as_str());
+                        (e.slot, label.chars().take(4).collect())
+                    })
+                    .collect();
+                (format!("node {n}"), cells)
+            })
+            .collect();
+        write(dir, "calendar.svg", &svg::calendar(bus.slots_per_cycle, sc.masks().first().copied().unwrap_or(1), &rows))?;
+    }
+    Ok(())
+}
+
+fn run_paper(a: &Args) -> Result<(), String> {
+    let t0 = Instant::now();
+    let cmp: Comparison = paper_comparison(&a.cfg);
+    let wall = t0.elapsed().as_secs_f64();
+    let sweep = if a.sweep { paper_sweep(&a.cfg, progress) } else { Vec::new() };
+    // Speed of one engine run alone (the figure the README quotes).
+    let t1 = Instant::now();
+    let sc = paper::scenario(paper::our_laxity(), a.cfg.load);
+    let _ = run_engine(&sc, &SimConfig { record_wire: false, ..a.cfg.clone() }, PolicyKind::Ours, Policy::OURS);
+    let one = t1.elapsed().as_secs_f64();
+    if a.json {
+        let pts: Vec<String> = sweep.iter().map(report::comparison_json).collect();
+        println!(
+            "{{\"scenario\":\"rtcan-paper\",\"seconds\":{},\"seed\":{},\"comparison\":{},\"sweep\":[{}],\"speed_x_real_time\":{:.1}}}",
+            a.cfg.seconds,
+            a.cfg.seed,
+            report::comparison_json(&cmp),
+            pts.join(","),
+            a.cfg.seconds / one.max(1e-9)
+        );
+    } else {
+        println!("rtcan-paper: {} s simulated, seed {}\n", a.cfg.seconds, a.cfg.seed);
+        print!("{}", report::comparison_text(&cmp));
+        for r in &cmp.runs {
+            println!();
+            print!("{}", report::text(r));
+        }
+        for c in &sweep {
+            println!();
+            print!("{}", report::comparison_text(c));
+        }
+        println!();
+        println!("{}", speed_line(a.cfg.seconds, one));
+        println!("(all four policies: {wall:.3} s wall)");
+    }
+    if let Some(dir) = &a.out {
+        if let Some(ours) = cmp.runs.iter().find(|r| r.policy == PolicyKind::Ours.name()) {
+            outputs(dir, &sc, ours)?;
+        }
+        for r in cmp.runs.iter().filter(|r| r.policy != PolicyKind::Ours.name()) {
+            write(dir, &format!("srt-latency-{}.svg", r.policy), &svg::srt_latency(r))?;
+        }
+        if let Some(r) = cmp.runs.iter().find(|r| r.policy == PolicyKind::FixedPriority.name()) {
+            write(dir, &format!("hrt-jitter-{}.svg", r.policy), &svg::hrt_jitter(r))?;
+        }
+        if !sweep.is_empty() {
+            let (miss, lat) = svg::sweep(&sweep);
+            write(dir, "sweep-miss.svg", &miss)?;
+            write(dir, "sweep-latency.svg", &lat)?;
+        }
+        write(dir, "report.json", &report::comparison_json(&cmp))?;
+        if !a.json {
+            println!("wrote {}", dir.display());
+        }
+    }
+    Ok(())
+}
+
+fn run_user_file(a: &Args, file: &Path) -> Result<(), String> {
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let user = robot::parse_user(&text, file.parent().unwrap_or(Path::new(".")))?;
+    let plan = rtcan_model::Robot::load(&user.robot).map_err(|d| d.render())?;
+    let traffic = robot::expand(&user, &plan)?;
+    run_plan(a, &plan, &traffic)
+}
+
+fn run_robot(a: &Args, path: &Path, traffic: &[robot::Traffic]) -> Result<(), String> {
+    let plan = rtcan_model::Robot::load(path).map_err(|d| d.render())?;
+    run_plan(a, &plan, traffic)
+}
+
+fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> Result<(), String> {
+    let sc = robot::scenario(plan, traffic)?;
+    let t0 = Instant::now();
+    let run = run_engine(&sc, &a.cfg, PolicyKind::Ours, Policy::OURS);
+    let wall = t0.elapsed().as_secs_f64();
+    if a.json {
+        println!(
+            "{{\"robot\":\"{}\",\"seconds\":{},\"seed\":{},\"run\":{},\"speed_x_real_time\":{:.1}}}",
+            plan.file.replace('\\', "\\\\").replace('"', "\\\""),
+            a.cfg.seconds,
+            a.cfg.seed,
+            report::run_json(&run),
+            a.cfg.seconds / wall.max(1e-9)
+        );
+    } else {
+        println!("{}: {} s simulated, seed {}\n", plan.file, a.cfg.seconds, a.cfg.seed);
+        print!("{}", report::text(&run));
+        println!("{}", speed_line(a.cfg.seconds, wall));
+    }
+    if let Some(dir) = &a.out {
+        outputs(dir, &sc, &run)?;
+        write(dir, "report.json", &report::run_json(&run))?;
+    }
+    Ok(())
+}

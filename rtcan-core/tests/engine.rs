@@ -1,0 +1,498 @@
+//! Engine behaviour on an ideal bit-accurate bus (tests/common): the RTCAN paper's
+//! benchmark schedule executed exactly, SRT in free windows only, fragmentation end to
+//! end, deadline misses and queue exhaustion reported, sync loss, malformed input.
+mod common;
+
+use common::*;
+use rtcan_core::admission::{admit, build_masks, HrtRequest, Placement};
+use rtcan_core::driver::{Event, TxOutcome};
+use rtcan_core::fragment::wire_len;
+use rtcan_core::id::{CanId, Class, MsgId};
+use rtcan_core::laxity::LaxityEncoding;
+use rtcan_core::tables::{BusConfig, CalEntry, NodeTables, RxTopic, TxTopic};
+use rtcan_core::Frame;
+
+const SPC: u8 = 60;
+const SLOT_NS: u64 = 166_666;
+const FP: u32 = 0xC0FF_EE01;
+/// Per node: H_A 1 ms (6 slots), H_B 5 ms (30), H_C 10 ms (60), then S (SRT, 20 B,
+/// 10 ms deadline) and N (NRT, 8 B).
+const PERIODS: [u32; 3] = [6, 30, 60];
+const S_SIZE: u16 = 20;
+
+fn msg_id(node: usize, topic: usize) -> MsgId {
+    MsgId(0x0140 + (node as u16) * 16 + topic as u16)
+}
+
+fn bus() -> BusConfig {
+    BusConfig {
+        bitrate: 1_000_000,
+        slots_per_cycle: SPC,
+        slot_ns: SLOT_NS,
+        hyperperiod_cycles: 1,
+        cycle_counter_wrap: 1 << 15,
+        laxity: LaxityEncoding::Linear {
+            unit_ns: SLOT_NS as u32,
+        },
+        guard_ns: 2_000,
+        fingerprint: FP,
+    }
+}
+
+struct Paper {
+    tables: Vec<NodeTables<'static>>,
+    placements: Vec<Placement>,
+}
+
+fn paper(nodes: usize) -> Paper {
+    let reqs: Vec<HrtRequest> = (0..nodes)
+        .flat_map(|_| {
+            PERIODS.iter().map(|&p| HrtRequest {
+                period_slots: p,
+                fragments: 1,
+            })
+        })
+        .collect();
+    let mut placements = vec![Placement::default(); reqs.len()];
+    admit(SPC as u32, &reqs, &mut placements, 1_000_000).expect("paper set is admissible");
+    let mut masks = vec![0u64; 1];
+    let cycles = build_masks(SPC as u32, &reqs, &placements, &mut masks).expect("masks");
+    assert_eq!(cycles, 1);
+    let masks: &'static [u64] = Box::leak(masks.into_boxed_slice());
+    let mut tables = Vec::new();
+    for n in 0..nodes {
+        let mut tx = Vec::new();
+        for (k, _) in PERIODS.iter().enumerate() {
+            tx.push(TxTopic {
+                msg_id: msg_id(n, k),
+                class: Class::Hrt,
+                size: 8,
+                deadline_ns: 0,
+            });
+        }
+        tx.push(TxTopic {
+            msg_id: msg_id(n, 3),
+            class: Class::Srt,
+            size: S_SIZE,
+            deadline_ns: 10_000_000,
+        });
+        tx.push(TxTopic {
+            msg_id: msg_id(n, 4),
+            class: Class::Nrt,
+            size: 8,
+            deadline_ns: 0,
+        });
+        let mut cal = Vec::new();
+        for k in 0..PERIODS.len() {
+            let pl = placements[n * 3 + k];
+            let mut s = pl.phase_slot;
+            while s < SPC as u32 {
+                cal.push(CalEntry {
+                    slot: s,
+                    tx: k as u8,
+                    fragment: 0,
+                });
+                s += PERIODS[k];
+            }
+        }
+        cal.sort_by_key(|c| c.slot);
+        let mut rx = Vec::new();
+        let mut off = 0u16;
+        for m in (0..nodes).filter(|&m| m != n) {
+            for k in 0..5 {
+                let size = if k == 3 { S_SIZE } else { 8 };
+                rx.push(RxTopic {
+                    msg_id: msg_id(m, k),
+                    size,
+                    arena_offset: 0,
+                });
+            }
+        }
+        rx.sort_by_key(|r| r.msg_id);
+        for r in rx.iter_mut() {
+            r.arena_offset = off;
+            off += wire_len(r.size as usize) as u16;
+        }
+        tables.push(NodeTables {
+            bus: bus(),
+            module: n as u8,
+            tx: Box::leak(tx.into_boxed_slice()),
+            rx: Box::leak(rx.into_boxed_slice()),
+            calendar: Box::leak(cal.into_boxed_slice()),
+            master_masks: if n == 0 { masks } else { &[] },
+        });
+    }
+    Paper { tables, placements }
+}
+
+/// Master (ideal clock, started at t=0 so cycle 0 starts at one slot) and slaves with
+/// ±1000 ppm and offsets.
+fn paper_bus(nodes: usize) -> (Bus, Paper) {
+    let p = paper(nodes);
+    let mut bus = Bus::new(1_000_000);
+    let drift = [0.0, 1000.0, -1000.0, 500.0];
+    let offset = [0.0, 3_333_333.0, 17_000.0, 123.0];
+    for (n, t) in p.tables.iter().enumerate() {
+        bus.add(*t, drift[n % 4], offset[n % 4]);
+    }
+    for n in 0..nodes {
+        bus.nodes[n].host.hrt = (0..3)
+            .map(|k| Some(vec![n as u8, k as u8, 0, 0, 0, 0, 0, 0xAA]))
+            .collect();
+    }
+    (bus, p)
+}
+
+/// Master bus time 0 (slot 0 of cycle 0) in global time: the master starts one slot
+/// after `new(now = 0)`.
+const T0: u64 = SLOT_NS;
+
+fn slot_of(t: u64) -> (u64, u64) {
+    assert!(t >= T0, "frame at {t} before the first cycle");
+    let abs = (t - T0) / SLOT_NS;
+    (abs / SPC as u64, abs % SPC as u64)
+}
+
+#[test]
+fn paper_benchmark_reserves_40_of_60_slots() {
+    let p = paper(3);
+    let mask = p.tables[0].master_masks[0];
+    assert_eq!(mask.count_ones(), 40, "39 HRT slots + sync slot 0 (Fig. 3)");
+    assert_eq!(mask & 1, 1);
+    assert_eq!(mask >> 60, 0);
+}
+
+#[test]
+fn hrt_frames_go_exactly_in_their_slots_with_drifting_slaves() {
+    let (mut bus, p) = paper_bus(3);
+    let cycles = 40u64;
+    bus.run(T0 + cycles * SPC as u64 * SLOT_NS);
+    let mut per_slot = std::collections::HashMap::new();
+    let mut hrt = 0;
+    for w in &bus.log {
+        let (cycle, slot) = slot_of(w.sof);
+        if w.frame.id().is_sync() {
+            assert_eq!(slot, 0, "sync in slot 0");
+            assert_eq!(
+                w.frame.id().raw() as u64,
+                cycle,
+                "sync carries the cycle counter"
+            );
+            assert!(w.sof - (T0 + cycle * 60 * SLOT_NS) < 1_000);
+            continue;
+        }
+        let id = w.frame.id();
+        if id.laxity() != 0 {
+            continue;
+        }
+        hrt += 1;
+        let k = ((id.msg_id().0 - 0x140) % 16) as usize;
+        let n = ((id.msg_id().0 - 0x140) / 16) as usize;
+        assert_eq!(n, w.node, "frame sent by the module that owns the topic");
+        let pl = p.placements[n * 3 + k].phase_slot as u64;
+        assert_eq!(
+            slot % PERIODS[k] as u64,
+            pl % PERIODS[k] as u64,
+            "topic {n}/{k} in slot {slot} cycle {cycle} sof {}", w.sof
+        );
+        // Within one bit time of the master's slot boundary once locked (cycle >= 3).
+        let start = T0 + (cycle * 60 + slot) * SLOT_NS;
+        if cycle >= 3 {
+            let err = w.sof.abs_diff(start);
+            assert!(
+                err <= 1_000,
+                "node {n} slot {slot} cycle {cycle}: {err} ns off"
+            );
+        }
+        assert!(
+            per_slot.insert((cycle, slot), n).is_none(),
+            "two HRT frames in one slot"
+        );
+        assert_eq!(w.frame.data(), &[n as u8, k as u8, 0, 0, 0, 0, 0, 0xAA]);
+    }
+    // Master: every cycle from 0; slaves from the cycle after their first sync.
+    assert!(hrt >= 3 * 13 * (cycles as usize - 2), "{hrt} HRT frames");
+    for n in 0..3 {
+        assert_eq!(bus.nodes[n].engine.counters().hrt_late, 0);
+        assert_eq!(bus.nodes[n].engine.counters().hrt_empty, 0);
+        let received = bus.nodes[n].host.delivered.len();
+        assert!(received > 0);
+    }
+}
+
+#[test]
+fn srt_fragmented_message_is_delivered_in_a_free_window_only() {
+    let (mut bus, p) = paper_bus(3);
+    bus.run(T0 + 5 * 60 * SLOT_NS);
+    let payload: Vec<u8> = (0..S_SIZE as u8).map(|b| b.wrapping_mul(7)).collect();
+    bus.submit(1, 3, &payload).expect("queued");
+    bus.run(T0 + 8 * 60 * SLOT_NS);
+    for rx_node in [0, 2] {
+        let got: Vec<_> = bus.nodes[rx_node]
+            .host
+            .delivered
+            .iter()
+            .filter(|(rx, _, _)| p.tables[rx_node].rx[*rx as usize].msg_id == msg_id(1, 3))
+            .collect();
+        assert_eq!(got.len(), 1, "node {rx_node}: {:?}", bus.nodes[rx_node].engine.counters());
+        assert_eq!(got[0].1, payload);
+    }
+    assert!(bus.nodes[1]
+        .host
+        .done
+        .iter()
+        .any(|d| d.0 == 3 && d.2 == TxOutcome::Sent));
+    // Three fragments (20 B + CRC = 22 B), counting down, SRT laxity 1..=62, all inside
+    // free slots and finished before the next reserved slot.
+    let mask = p.tables[0].master_masks[0];
+    let frags: Vec<_> = bus
+        .log
+        .iter()
+        .filter(|w| w.frame.id().msg_id() == msg_id(1, 3))
+        .collect();
+    assert_eq!(
+        frags
+            .iter()
+            .map(|w| w.frame.id().fragment())
+            .collect::<Vec<_>>(),
+        vec![2, 1, 0]
+    );
+    assert_eq!(
+        frags.iter().map(|w| w.frame.dlc()).collect::<Vec<_>>(),
+        vec![8, 8, 6]
+    );
+    for w in &frags {
+        assert!((1..=62).contains(&w.frame.id().laxity()));
+        let (_, slot) = slot_of(w.sof);
+        assert_eq!(
+            mask >> slot & 1,
+            0,
+            "SRT frame started in reserved slot {slot}"
+        );
+        let (_, end_slot) = slot_of(w.end - 1);
+        for s in slot..=end_slot {
+            assert_eq!(
+                mask >> (s % 60) & 1,
+                0,
+                "SRT frame overran into reserved slot {s}"
+            );
+        }
+    }
+}
+
+#[test]
+fn no_frame_ever_overlaps_a_reserved_slot_under_srt_overload() {
+    let (mut bus, p) = paper_bus(3);
+    bus.run(T0 + 4 * 60 * SLOT_NS);
+    let mask = p.tables[0].master_masks[0];
+    let mut refused = 0;
+    for round in 0..30u64 {
+        for n in 0..3 {
+            for _ in 0..3 {
+                if bus.submit(n, 3, &[round as u8; S_SIZE as usize]).is_err() {
+                    refused += 1;
+                }
+                let _ = bus.submit(n, 4, &[n as u8; 8]);
+            }
+        }
+        let t = bus.now + 2 * SLOT_NS * 7;
+        bus.run(t);
+    }
+    bus.run(bus.now + 20 * 60 * SLOT_NS);
+    assert!(refused > 0, "queue exhaustion is reported to the caller");
+    let missed: usize = (0..3)
+        .map(|n| {
+            bus.nodes[n]
+                .host
+                .done
+                .iter()
+                .filter(|d| d.2 == TxOutcome::DeadlineMissed)
+                .count()
+        })
+        .sum();
+    let counted: u32 = (0..3)
+        .map(|n| bus.nodes[n].engine.counters().deadline_missed)
+        .sum();
+    assert_eq!(missed as u32, counted);
+    for w in &bus.log {
+        let id = w.frame.id();
+        if id.laxity() == 0 {
+            continue;
+        }
+        // Slot clocks agree to within one bit time (1 us): allow that much at both ends.
+        let (c0, s0) = slot_of(w.sof + 1_000);
+        let (c1, s1) = slot_of(w.end - 1_000);
+        let mut abs = c0 * 60 + s0;
+        while abs <= c1 * 60 + s1 {
+            assert_eq!(
+                mask >> (abs % 60) & 1,
+                0,
+                "frame {:08X} from node {} at {}..{} overlaps reserved slot {} (abs {}, starts at {})",
+                id.raw(),
+                w.node,
+                w.sof,
+                w.end,
+                abs % 60,
+                abs,
+                T0 + abs * SLOT_NS
+            );
+            abs += 1;
+        }
+    }
+    for n in 0..3 {
+        assert_eq!(bus.nodes[n].engine.counters().hrt_late, 0);
+    }
+}
+
+#[test]
+fn nrt_goes_after_srt_and_heartbeats_flow() {
+    let (mut bus, _) = paper_bus(3);
+    bus.run(T0 + 30 * 60 * SLOT_NS);
+    for n in 0..3 {
+        let hb: Vec<_> = bus.nodes[n]
+            .host
+            .events
+            .iter()
+            .filter_map(|e| {
+                if let Event::Heartbeat { module, .. } = e {
+                    Some(*module)
+                } else {
+                    None
+                }
+            })
+            .collect();
+        for m in (0..3).filter(|&m| m != n) {
+            assert!(
+                hb.contains(&(m as u8)),
+                "node {n} heard module {m}'s heartbeat"
+            );
+        }
+    }
+    assert!(bus.log.iter().any(|w| w.frame.id().laxity() == 63));
+}
+
+#[test]
+fn slaves_report_sync_loss_and_go_silent() {
+    let (mut bus, _) = paper_bus(3);
+    bus.run(T0 + 10 * 60 * SLOT_NS);
+    assert!(bus.nodes[1].host.events.contains(&Event::Synced));
+    bus.nodes[0].alive = false;
+    let cut = bus.now;
+    bus.run(cut + 10 * 60 * SLOT_NS);
+    for n in 1..3 {
+        assert!(
+            bus.nodes[n].host.events.contains(&Event::SyncLost),
+            "node {n}"
+        );
+        assert!(bus.nodes[n].engine.counters().sync_missed >= 1);
+    }
+    let last = bus
+        .log
+        .iter()
+        .filter(|w| w.node != 0)
+        .map(|w| w.sof)
+        .max()
+        .unwrap_or(0);
+    assert!(
+        last < cut + 5 * 60 * SLOT_NS,
+        "slaves stopped transmitting after losing sync"
+    );
+}
+
+#[test]
+fn malformed_frames_are_counted_never_delivered() {
+    let p = paper(3);
+    let mut e = TestEngine::new(p.tables[1], 0);
+    let mut can = TestCan::default();
+    let mut host = TestHost::default();
+    // Garbage sync: wrong DLC, and a mask with bits past slot 59.
+    let bad_sync = Frame::new(CanId::from_raw(5).unwrap(), &[1, 2, 3]).unwrap();
+    e.on_rx(&bad_sync, 10, &mut can, &mut host);
+    let bad_sync2 = Frame::new(CanId::from_raw(6).unwrap(), &[0xFF; 8]).unwrap();
+    e.on_rx(&bad_sync2, 10, &mut can, &mut host);
+    assert_eq!(e.counters().rx_bad_sync, 2);
+    // Unknown message ID.
+    let unknown = Frame::new(CanId::new(5, MsgId(0x7777), 0).unwrap(), &[0; 8]).unwrap();
+    e.on_rx(&unknown, 10, &mut can, &mut host);
+    assert_eq!(e.counters().rx_unknown_id, 1);
+    // Wrong DLC for an 8-byte topic of node 0.
+    let short = Frame::new(CanId::new(0, msg_id(0, 0), 0).unwrap(), &[1, 2, 3]).unwrap();
+    e.on_rx(&short, 10, &mut can, &mut host);
+    assert_eq!(e.counters().rx_bad_dlc, 1);
+    // Fragment out of order for the 20-byte SRT topic (starts at counter 1, not 2).
+    let ooo = Frame::new(CanId::new(7, msg_id(0, 3), 1).unwrap(), &[0; 8]).unwrap();
+    e.on_rx(&ooo, 10, &mut can, &mut host);
+    assert_eq!(e.counters().rx_out_of_order, 1);
+    // Heartbeat with a bad DLC.
+    let hb = Frame::new(CanId::new(63, MsgId(0x0100), 0).unwrap(), &[1]).unwrap();
+    e.on_rx(&hb, 10, &mut can, &mut host);
+    assert_eq!(e.counters().rx_bad_heartbeat, 1);
+    assert!(host.delivered.is_empty());
+    assert!(can.mailboxes.iter().all(|m| m.is_none()));
+}
+
+#[test]
+fn fingerprint_mismatch_is_reported() {
+    let p = paper(3);
+    let mut e = TestEngine::new(p.tables[1], 0);
+    let mut can = TestCan::default();
+    let mut host = TestHost::default();
+    let hb = rtcan_core::heartbeat::heartbeat_frame(rtcan_core::heartbeat::Heartbeat {
+        module: 2,
+        state: 1,
+        fingerprint: FP ^ 1,
+    })
+    .unwrap();
+    e.on_rx(&hb, 10, &mut can, &mut host);
+    assert_eq!(
+        host.events,
+        vec![Event::FingerprintMismatch {
+            module: 2,
+            fingerprint: FP ^ 1
+        }]
+    );
+}
+
+#[test]
+fn submit_rejects_hrt_topics_wrong_sizes_and_full_queues() {
+    let p = paper(3);
+    let mut e = TestEngine::new(p.tables[0], 0);
+    let mut can = TestCan::default();
+    let mut host = TestHost::default();
+    let t = host.add(&[0; 8]);
+    assert_eq!(
+        e.submit(0, 0, t, &mut can, &mut host),
+        Err(rtcan_core::engine::SubmitError::NotSubmittable)
+    );
+    assert_eq!(
+        e.submit(0, 3, t, &mut can, &mut host),
+        Err(rtcan_core::engine::SubmitError::NotSubmittable)
+    );
+    assert_eq!(
+        e.submit(0, 99, t, &mut can, &mut host),
+        Err(rtcan_core::engine::SubmitError::NotSubmittable)
+    );
+    for _ in 0..16 {
+        e.submit(0, 4, t, &mut can, &mut host).unwrap();
+    }
+    assert_eq!(
+        e.submit(0, 4, t, &mut can, &mut host),
+        Err(rtcan_core::engine::SubmitError::QueueFull)
+    );
+    assert_eq!(e.counters().queue_full, 1);
+}
+
+#[test]
+fn hrt_slot_with_nothing_to_send_is_reported() {
+    let (mut bus, _) = paper_bus(1);
+    bus.nodes[0].host.hrt[1] = None;
+    bus.run(T0 + 3 * 60 * SLOT_NS);
+    let empty = bus.nodes[0]
+        .host
+        .done
+        .iter()
+        .filter(|d| d.0 == 1 && d.2 == TxOutcome::NothingToSend)
+        .count();
+    assert_eq!(empty, 6, "H_B every 30 slots over 3 cycles");
+    assert_eq!(bus.nodes[0].engine.counters().hrt_empty, 6);
+}

@@ -1,0 +1,163 @@
+//! System status as seen from one module, fed by the engine's `Host::event`:
+//! sync state, the master's heartbeat age, other modules' states and fingerprints.
+//! Nodes read `safe_state_required()` (motor modules stop their motors on `true`).
+use core::cell::RefCell;
+
+use critical_section::Mutex;
+use rtcan_core::driver::Event;
+
+use crate::node::NodeState;
+
+/// Safety parameters of a module (generated from robot.toml).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SafetyConfig {
+    /// This module's index.
+    pub module: u8,
+    /// The master's module index.
+    pub master: u8,
+    /// Cycles without a master heartbeat after which the safe state is required.
+    pub max_missed_cycles: u16,
+}
+
+/// Why the safe state is required (first matching reason in this order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SafeReason {
+    /// A module announced another robot fingerprint (latched until `reset`).
+    FingerprintMismatch { module: u8, fingerprint: u32 },
+    /// Not (or no longer) locked on the master's sync.
+    NoSync,
+    /// The master's heartbeat has not been heard for more than `max_missed_cycles`.
+    MasterSilent,
+    /// The master announced `Fail` or `Stop`.
+    MasterStopped,
+}
+
+struct StatusState {
+    synced: bool,
+    master_heard: bool,
+    master_age: u16,
+    master_state: u8,
+    mismatch: Option<(u8, u32)>,
+    heard: u64,
+    states: [u8; 64],
+    sync_losses: u32,
+}
+
+/// The system-status view of one module. `static STATUS: SystemStatus = SystemStatus::new(cfg);`
+pub struct SystemStatus {
+    config: SafetyConfig,
+    state: Mutex<RefCell<StatusState>>,
+}
+
+impl SystemStatus {
+    /// Nothing heard yet: the safe state is required until sync and the master's
+    /// heartbeat arrive (on the master itself, until nothing; it is its own sync).
+    pub const fn new(config: SafetyConfig) -> Self {
+        SystemStatus {
+            config,
+            state: Mutex::new(RefCell::new(StatusState {
+                synced: false,
+                master_heard: false,
+                master_age: 0,
+                master_state: 0,
+                mismatch: None,
+                heard: 0,
+                states: [0; 64],
+                sync_losses: 0,
+            })),
+        }
+    }
+
+    fn with<R>(&self, f: impl FnOnce(&mut StatusState) -> R) -> R {
+        critical_section::with(|cs| f(&mut self.state.borrow_ref_mut(cs)))
+    }
+
+    /// Feeds an engine event.
+    pub fn event(&self, event: Event) {
+        let master = self.config.master;
+        self.with(|st| match event {
+            Event::Synced => st.synced = true,
+            Event::SyncLost => {
+                st.synced = false;
+                st.sync_losses = st.sync_losses.saturating_add(1);
+            }
+            Event::FingerprintMismatch {
+                module,
+                fingerprint,
+            } => {
+                if st.mismatch.is_none() {
+                    st.mismatch = Some((module, fingerprint));
+                }
+            }
+            Event::Heartbeat { module, state } => {
+                if let Some(s) = st.states.get_mut(usize::from(module)) {
+                    *s = state;
+                    st.heard |= 1u64 << (module & 63);
+                }
+                if module == master {
+                    st.master_heard = true;
+                    st.master_age = 0;
+                    st.master_state = state;
+                }
+            }
+        });
+    }
+
+    /// Called once per bus cycle (by the glue or a periodic task): ages the master's heartbeat.
+    pub fn on_cycle(&self) {
+        self.with(|st| st.master_age = st.master_age.saturating_add(1));
+    }
+
+    /// Why the safe state is required now, if it is.
+    pub fn safe_reason(&self) -> Option<SafeReason> {
+        let cfg = self.config;
+        self.with(|st| {
+            if let Some((module, fingerprint)) = st.mismatch {
+                return Some(SafeReason::FingerprintMismatch {
+                    module,
+                    fingerprint,
+                });
+            }
+            if cfg.module == cfg.master {
+                return None;
+            }
+            if !st.synced {
+                return Some(SafeReason::NoSync);
+            }
+            if !st.master_heard || st.master_age > cfg.max_missed_cycles {
+                return Some(SafeReason::MasterSilent);
+            }
+            match NodeState::from_u8(st.master_state) {
+                Some(NodeState::Fail) | Some(NodeState::Stop) => Some(SafeReason::MasterStopped),
+                _ => None,
+            }
+        })
+    }
+
+    /// Nodes must enter their safe state (motors stopped).
+    pub fn safe_state_required(&self) -> bool {
+        self.safe_reason().is_some()
+    }
+
+    /// Last state byte heard from `module`, `None` if never heard.
+    pub fn module_state(&self, module: u8) -> Option<u8> {
+        self.with(|st| {
+            if module < 64 && st.heard & (1u64 << module) != 0 {
+                st.states.get(usize::from(module)).copied()
+            } else {
+                None
+            }
+        })
+    }
+
+    /// Times sync was lost.
+    pub fn sync_losses(&self) -> u32 {
+        self.with(|st| st.sync_losses)
+    }
+
+    /// Clears the latched fingerprint mismatch (after the operator fixed the robot).
+    pub fn reset(&self) {
+        self.with(|st| st.mismatch = None);
+    }
+}

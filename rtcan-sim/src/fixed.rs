@@ -1,0 +1,244 @@
+//! Baseline (d): plain CAN with fixed priorities and no TDMA. Each node sends its HRT
+//! topics from a free-running local timer and its SRT events as they come, with
+//! identifiers ordered rate-monotonic for HRT (above everything) and
+//! deadline-monotonic for SRT, messages fragmented as RTCAN does. A message still
+//! queued at its deadline (HRT: the next period) is dropped. This is what the bus does
+//! without temporal isolation; it shares no scheduling code with the engine.
+use rtcan_core::driver::{Mailbox, Token, TxResult, MAILBOXES};
+use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
+use rtcan_core::{CanId, Class, Controller, Frame, Host, Nanos};
+
+use crate::bus::Module;
+use crate::controller::SimController;
+use crate::tables::OwnedTables;
+use crate::traffic::TrafficHost;
+
+struct Msg {
+    prio: u8,
+    tx: u8,
+    token: Token,
+    crc: u16,
+    next_fragment: u8,
+    deadline: Nanos,
+    loaded: Option<usize>,
+}
+
+/// A node of the fixed-priority baseline.
+pub struct FixedNode<'t> {
+    tables: &'t OwnedTables,
+    /// Traffic generator (the same streams as the engine runs).
+    pub host: TrafficHost,
+    hrt_next: Vec<Option<(Nanos, Nanos)>>,
+    queue: Vec<Msg>,
+    mailboxes: [bool; MAILBOXES],
+    /// Messages dropped at their deadline, HRT and SRT.
+    pub dropped: u64,
+}
+
+impl<'t> FixedNode<'t> {
+    /// Node on `tables`; HRT periods (ns) per transmit topic and phases from the calendar.
+    pub fn new(tables: &'t OwnedTables, host: TrafficHost, hrt_period_ns: &[Nanos]) -> Self {
+        let slot = tables.bus.slot_ns;
+        let hrt_next = tables
+            .tx
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let period = hrt_period_ns.get(i).copied().unwrap_or(0);
+                (t.class == Class::Hrt && period > 0).then(|| {
+                    let phase = tables
+                        .calendar
+                        .iter()
+                        .find(|e| usize::from(e.tx) == i)
+                        .map_or(0, |e| u64::from(e.slot));
+                    (slot + phase * slot, period)
+                })
+            })
+            .collect();
+        FixedNode {
+            tables,
+            host,
+            hrt_next,
+            queue: Vec::new(),
+            mailboxes: [false; MAILBOXES],
+            dropped: 0,
+        }
+    }
+
+    fn prio(&self, tx: u8) -> u8 {
+        let Some(t) = self.tables.tx.get(usize::from(tx)) else {
+            return 63;
+        };
+        match t.class {
+            // Rate monotonic, 1 ms → 1, 10 ms → 10, capped below every SRT priority.
+            Class::Hrt => self
+                .hrt_next
+                .get(usize::from(tx))
+                .copied()
+                .flatten()
+                .map_or(1, |(_, p)| (p / 1_000_000).clamp(1, 20) as u8),
+            // Deadline monotonic, above 20.
+            Class::Srt => (21 + t.deadline_ns / 1_000_000).min(62) as u8,
+            Class::Nrt => 63,
+        }
+    }
+
+    fn enqueue(&mut self, tx: u8, token: Token, deadline: Nanos) {
+        let payload = self.host.payload(token);
+        let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
+        let next_fragment = fragment_count(payload.len()).saturating_sub(1);
+        let prio = self.prio(tx);
+        self.queue.push(Msg {
+            prio,
+            tx,
+            token,
+            crc,
+            next_fragment,
+            deadline,
+            loaded: None,
+        });
+    }
+
+    fn fill(&mut self, now: Nanos, can: &mut SimController) {
+        // Drop what can no longer be on time and is not on its way.
+        let mut i = 0;
+        while i < self.queue.len() {
+            let expired = self
+                .queue
+                .get(i)
+                .is_some_and(|m| m.loaded.is_none() && m.deadline <= now);
+            if expired {
+                let m = self.queue.swap_remove(i);
+                self.dropped += 1;
+                self.host
+                    .tx_done(m.tx, Some(m.token), rtcan_core::TxOutcome::DeadlineMissed);
+            } else {
+                i += 1;
+            }
+        }
+        while let Some(free) = self.mailboxes.iter().position(|b| !b) {
+            let best = self
+                .queue
+                .iter()
+                .enumerate()
+                .filter(|(_, m)| m.loaded.is_none())
+                .min_by_key(|(_, m)| (m.prio, m.deadline))
+                .map(|(i, _)| i);
+            let Some(bi) = best else { break };
+            let Some(m) = self.queue.get_mut(bi) else {
+                break;
+            };
+            let Some(topic) = self.tables.tx.get(usize::from(m.tx)) else {
+                break;
+            };
+            let mut data = [0u8; 8];
+            let dlc = fragment_data(
+                self.host.payload(m.token),
+                m.crc,
+                m.next_fragment,
+                &mut data,
+            );
+            let (Some(id), true) = (CanId::new(m.prio, topic.msg_id, m.next_fragment), true) else {
+                break;
+            };
+            let Some(frame) = Frame::from_parts(id, dlc, data) else {
+                break;
+            };
+            m.loaded = Some(free);
+            if let Some(b) = self.mailboxes.get_mut(free) {
+                *b = true;
+            }
+            can.load(Mailbox(free as u8), &frame);
+        }
+    }
+
+    fn next(&self) -> Option<Nanos> {
+        let h = self.hrt_next.iter().flatten().map(|(t, _)| *t).min();
+        match (h, self.host.next_local()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+}
+
+impl Module for FixedNode<'_> {
+    fn start(&mut self, _now: Nanos, _can: &mut SimController) -> Option<Nanos> {
+        self.next()
+    }
+
+    fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        for tx in 0..self.hrt_next.len() {
+            let Some(Some((due, period))) = self.hrt_next.get(tx).copied() else {
+                continue;
+            };
+            if due <= now {
+                if let Some(slot) = self.hrt_next.get_mut(tx) {
+                    *slot = Some((due + period, period));
+                }
+                if let Some(token) = self.host.hrt_sample(tx as u8) {
+                    self.enqueue(tx as u8, token, due + period);
+                }
+            }
+        }
+        while let Some((tx, token)) = self.host.take_due(now) {
+            let d = self
+                .tables
+                .tx
+                .get(usize::from(tx))
+                .map_or(0, |t| t.deadline_ns);
+            self.enqueue(tx, token, now + d);
+        }
+        self.fill(now, can);
+        self.next()
+    }
+
+    fn rx(
+        &mut self,
+        _f: &Frame,
+        _sof: Nanos,
+        _now: Nanos,
+        _can: &mut SimController,
+    ) -> Option<Nanos> {
+        self.next()
+    }
+
+    fn tx_done(
+        &mut self,
+        mailbox: Mailbox,
+        result: TxResult,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        let mb = usize::from(mailbox.0);
+        if let Some(b) = self.mailboxes.get_mut(mb) {
+            *b = false;
+        }
+        if let Some(i) = self.queue.iter().position(|m| m.loaded == Some(mb)) {
+            let finished = match self.queue.get_mut(i) {
+                Some(m) => {
+                    m.loaded = None;
+                    if result == TxResult::Sent {
+                        if m.next_fragment == 0 {
+                            true
+                        } else {
+                            m.next_fragment -= 1;
+                            false
+                        }
+                    } else {
+                        false
+                    }
+                }
+                None => false,
+            };
+            if finished {
+                let m = self.queue.swap_remove(i);
+                self.host
+                    .tx_done(m.tx, Some(m.token), rtcan_core::TxOutcome::Sent);
+            }
+        }
+        self.fill(now, can);
+        self.next()
+    }
+
+    fn rx_overrun(&mut self, _now: Nanos) {}
+}

@@ -1,0 +1,214 @@
+//! A scenario from any robot.toml: the plan's per-module tables, HRT topics always
+//! sampled, SRT/NRT topics driven by generators (declared rates by default, or a user
+//! traffic file, docs/SIM.md).
+use rtcan_core::{Class, Nanos};
+use rtcan_model::Plan;
+
+use crate::run::{topic_infos, Scenario};
+use crate::tables::OwnedTables;
+use crate::traffic::{Gen, GenKind, SIM_ARENA, SIM_RX, WARMUP_NS};
+
+/// A traffic override for one topic (by name).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Traffic {
+    /// Topic name.
+    pub topic: String,
+    /// Arrival process.
+    pub kind: GenKind,
+}
+
+/// Builds the scenario of `plan`; `traffic` overrides declared rates per topic. Topics
+/// without a rate and without an override send nothing.
+pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
+    let mut tables = Vec::new();
+    let mut gens = Vec::new();
+    for (i, m) in plan.modules.iter().enumerate() {
+        let t = plan
+            .tables(i)
+            .ok_or_else(|| format!("no tables for module {}", m.name))?;
+        if t.rx.len() > SIM_RX {
+            return Err(format!(
+                "module {} receives {} topics; the simulator holds {SIM_RX}",
+                m.name,
+                t.rx.len()
+            ));
+        }
+        let ot = OwnedTables {
+            bus: t.bus,
+            module: t.module,
+            tx: t.tx,
+            rx: t.rx,
+            calendar: t.calendar,
+            master_masks: t.master_masks,
+        };
+        if ot.arena_bytes() > SIM_ARENA {
+            return Err(format!(
+                "module {} needs {} arena bytes; the simulator holds {SIM_ARENA}",
+                m.name,
+                ot.arena_bytes()
+            ));
+        }
+        let mut g = Vec::new();
+        for (k, &ti) in m.tx.iter().enumerate() {
+            let Some(topic) = plan.topics.get(ti) else {
+                continue;
+            };
+            let tx = k as u8;
+            if topic.class == Class::Hrt {
+                g.push(Gen::hrt(tx));
+                continue;
+            }
+            let kind = match traffic.iter().find(|t| t.topic == topic.name) {
+                Some(t) => Some(t.kind),
+                None => topic.rate_hz.filter(|r| *r > 0.0).map(|r| {
+                    let mean = 1e9 / r;
+                    GenKind::Random {
+                        lo: (mean * 0.5) as Nanos,
+                        hi: (mean * 1.5) as Nanos,
+                    }
+                }),
+            };
+            if let Some(kind) = kind {
+                g.push(Gen {
+                    tx,
+                    kind,
+                    size: usize::from(topic.size),
+                    start_ns: WARMUP_NS,
+                });
+            }
+        }
+        tables.push(ot);
+        gens.push(g);
+    }
+    for t in traffic {
+        if plan.topic(&t.topic).is_none() {
+            return Err(format!("traffic for unknown topic `{}`", t.topic));
+        }
+    }
+    let master = plan.bus.master;
+    let name = |n: usize, k: usize| -> String {
+        plan.modules
+            .get(n)
+            .and_then(|m| m.tx.get(k))
+            .and_then(|&ti| plan.topics.get(ti))
+            .map_or_else(|| "?".into(), |t| t.name.clone())
+    };
+    let period = |n: usize, k: usize| -> u64 {
+        plan.modules
+            .get(n)
+            .and_then(|m| m.tx.get(k))
+            .and_then(|&ti| plan.topics.get(ti))
+            .and_then(|t| t.period_slots)
+            .map_or(0, u64::from)
+    };
+    let topics = topic_infos(&tables, name, period);
+    Ok(Scenario {
+        tables,
+        gens,
+        topics,
+        master,
+    })
+}
+
+/// A user scenario file: the robot it runs and traffic per topic.
+///
+/// ```toml
+/// robot = "../../robots/rtcan-paper.toml"   # relative to this file
+/// [traffic]
+/// "s_a*" = { every = ["10ms", "20ms"] }    # uniform inter-arrival; trailing * = prefix
+/// s_c1_1 = { period = "50ms" }             # periodic
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct UserScenario {
+    /// Path of the robot.toml (resolved against the scenario file's directory).
+    pub robot: std::path::PathBuf,
+    /// Patterns and processes in file order.
+    pub traffic: Vec<(String, GenKind)>,
+}
+
+fn duration(v: &toml_edit::Item, what: &str) -> Result<Nanos, String> {
+    let s = v
+        .as_str()
+        .ok_or_else(|| format!("{what}: expected a duration string like \"10ms\""))?;
+    rtcan_model::units::duration_ns(s).map_err(|e| format!("{what}: {e}"))
+}
+
+/// Parses a scenario file's text; `dir` resolves the robot path.
+pub fn parse_user(text: &str, dir: &std::path::Path) -> Result<UserScenario, String> {
+    let doc: toml_edit::DocumentMut = text
+        .parse()
+        .map_err(|e: toml_edit::TomlError| e.to_string())?;
+    let robot = doc
+        .get("robot")
+        .and_then(|r| r.as_str())
+        .ok_or("missing `robot = \"path/to/robot.toml\"`")?;
+    let mut traffic = Vec::new();
+    if let Some(t) = doc.get("traffic") {
+        let t = t.as_table_like().ok_or("`traffic` must be a table")?;
+        for (pattern, v) in t.iter() {
+            let v = v.as_table_like().ok_or_else(|| {
+                format!("traffic.{pattern}: expected {{ every = [..] }} or {{ period = .. }}")
+            })?;
+            let kind = if let Some(e) = v.get("every") {
+                let arr = e
+                    .as_array()
+                    .ok_or_else(|| format!("traffic.{pattern}.every: expected [min, max]"))?;
+                let vals: Vec<&str> = arr.iter().filter_map(|x| x.as_str()).collect();
+                let [lo, hi] = vals.as_slice() else {
+                    return Err(format!("traffic.{pattern}.every: expected two durations"));
+                };
+                let lo = rtcan_model::units::duration_ns(lo)
+                    .map_err(|e| format!("traffic.{pattern}.every: {e}"))?;
+                let hi = rtcan_model::units::duration_ns(hi)
+                    .map_err(|e| format!("traffic.{pattern}.every: {e}"))?;
+                if lo == 0 || hi < lo {
+                    return Err(format!("traffic.{pattern}.every: need 0 < min <= max"));
+                }
+                GenKind::Random { lo, hi }
+            } else if let Some(p) = v.get("period") {
+                let period = duration(p, &format!("traffic.{pattern}.period"))?;
+                if period == 0 {
+                    return Err(format!("traffic.{pattern}.period: must be > 0"));
+                }
+                GenKind::Periodic { period }
+            } else {
+                return Err(format!("traffic.{pattern}: expected `every` or `period`"));
+            };
+            traffic.push((pattern.to_string(), kind));
+        }
+    }
+    Ok(UserScenario {
+        robot: dir.join(robot),
+        traffic,
+    })
+}
+
+/// Expands the patterns of `user` over the topics of `plan` (first matching pattern wins).
+pub fn expand(user: &UserScenario, plan: &Plan) -> Result<Vec<Traffic>, String> {
+    let mut out: Vec<Traffic> = Vec::new();
+    for (pattern, kind) in &user.traffic {
+        let matches: Vec<&str> = plan
+            .topics
+            .iter()
+            .map(|t| t.name.as_str())
+            .filter(|n| match pattern.strip_suffix('*') {
+                Some(prefix) => n.starts_with(prefix),
+                None => n == pattern,
+            })
+            .collect();
+        if matches.is_empty() {
+            return Err(format!(
+                "traffic pattern `{pattern}` matches no topic of the robot"
+            ));
+        }
+        for m in matches {
+            if !out.iter().any(|t| t.topic == m) {
+                out.push(Traffic {
+                    topic: m.to_string(),
+                    kind: *kind,
+                });
+            }
+        }
+    }
+    Ok(out)
+}

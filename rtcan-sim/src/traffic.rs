@@ -1,0 +1,343 @@
+//! Traffic generators and the module that runs an `rtcan_core::Engine` on the simulated
+//! controller with a generator as its `Host`. HRT topics always have a fresh sample; SRT
+//! topics get events at random inter-arrival times. Each generator draws from its own
+//! PRNG stream, so the event trace of a seed is the same whatever policy runs it.
+//!
+//! Payloads carry their identity so that the wire log alone tells which event a frame
+//! belongs to: bytes 0..4 sequence number (LE), byte 4 node, byte 5 topic, then a
+//! pattern derived from the sequence number (checked on delivery).
+use rtcan_core::driver::{Event, Mailbox, Token, TxOutcome, TxResult};
+use rtcan_core::engine::{Engine, Policy};
+use rtcan_core::{Frame, Host, Nanos};
+
+use crate::bus::Module;
+use crate::clock::NodeClock;
+use crate::controller::SimController;
+use crate::rng::Rng;
+use crate::tables::OwnedTables;
+
+/// Receive topics an engine of the simulator can hold.
+pub const SIM_RX: usize = 128;
+/// Reassembly arena of a simulated engine, bytes.
+pub const SIM_ARENA: usize = 8192;
+/// SRT/NRT queue capacity of a simulated engine.
+pub const SIM_Q: usize = 64;
+/// The engine type every simulated module runs.
+pub type SimEngine<'t> = Engine<'t, SIM_RX, SIM_ARENA, SIM_Q>;
+
+/// How a topic's messages are produced.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GenKind {
+    /// HRT: a fresh sample whenever the slot comes.
+    Hrt,
+    /// Events with uniformly distributed inter-arrival times in `lo..=hi` ns.
+    Random { lo: Nanos, hi: Nanos },
+    /// Events with a fixed period.
+    Periodic { period: Nanos },
+}
+
+/// Generator of one transmit topic.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gen {
+    /// Transmit topic index.
+    pub tx: u8,
+    /// Arrival process.
+    pub kind: GenKind,
+    /// Payload size, bytes.
+    pub size: usize,
+    /// First event not before this global time (lets slaves lock on sync first).
+    pub start_ns: Nanos,
+}
+
+/// Default start of SRT traffic: after a few cycles of sync.
+pub const WARMUP_NS: Nanos = 30_000_000;
+
+impl Gen {
+    /// HRT generator.
+    pub fn hrt(tx: u8) -> Self {
+        Gen {
+            tx,
+            kind: GenKind::Hrt,
+            size: 0,
+            start_ns: 0,
+        }
+    }
+    /// Random inter-arrival generator.
+    pub fn random(tx: u8, lo: Nanos, hi: Nanos, size: usize) -> Self {
+        Gen {
+            tx,
+            kind: GenKind::Random { lo, hi },
+            size,
+            start_ns: WARMUP_NS,
+        }
+    }
+}
+
+/// Fills `buf` with the identity payload of event `seq` of (`node`, `tx`).
+pub fn fill_payload(buf: &mut [u8], seq: u32, node: u8, tx: u8) {
+    for (i, b) in buf.iter_mut().enumerate() {
+        *b = match i {
+            0..=3 => seq.to_le_bytes().get(i).copied().unwrap_or(0),
+            4 => node,
+            5 => tx,
+            _ => (seq as u8).wrapping_mul(31).wrapping_add(i as u8),
+        };
+    }
+}
+
+/// Sequence number of an identity payload (its first bytes; shorter payloads pad 0).
+pub fn payload_seq(data: &[u8]) -> u32 {
+    let mut b = [0u8; 4];
+    for (d, s) in b.iter_mut().zip(data) {
+        *d = *s;
+    }
+    u32::from_le_bytes(b)
+}
+
+struct GenState {
+    gen: Gen,
+    rng: Rng,
+    next_global: Nanos,
+    seq: u32,
+}
+
+/// Per-topic tallies kept by a generator host.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TopicLog {
+    /// Global time of each SRT event, indexed by sequence number.
+    pub events: Vec<Nanos>,
+    /// Events the engine refused (queue full).
+    pub refused: u64,
+    /// Events the engine dropped (deadline).
+    pub dropped: u64,
+    /// HRT samples handed out.
+    pub samples: u64,
+}
+
+/// A `Host` that generates traffic and checks what it receives.
+pub struct TrafficHost {
+    node: u8,
+    clock: NodeClock,
+    gens: Vec<GenState>,
+    slab: Vec<Vec<u8>>,
+    free: Vec<u16>,
+    /// Per transmit topic.
+    pub topics: Vec<TopicLog>,
+    /// Messages delivered whose payload matched the identity pattern.
+    pub rx_ok: u64,
+    /// Delivered messages whose payload did not.
+    pub rx_bad: u64,
+    /// Protocol events seen.
+    pub events: Vec<Event>,
+}
+
+impl TrafficHost {
+    /// Generators `gens` for node `node` (whose clock is `clock`), streams from `seed`.
+    pub fn new(node: u8, clock: NodeClock, gens: &[Gen], tx_topics: usize, seed: u64) -> Self {
+        let gens = gens
+            .iter()
+            .map(|g| {
+                let mut rng = Rng::new(seed, (u64::from(node) << 8) | u64::from(g.tx));
+                let first = match g.kind {
+                    GenKind::Hrt => Nanos::MAX,
+                    GenKind::Random { lo, hi } => g.start_ns + rng.range(lo, hi),
+                    GenKind::Periodic { period } => g.start_ns + rng.range(0, period),
+                };
+                GenState {
+                    gen: *g,
+                    rng,
+                    next_global: first,
+                    seq: 0,
+                }
+            })
+            .collect();
+        TrafficHost {
+            node,
+            clock,
+            gens,
+            slab: Vec::new(),
+            free: Vec::new(),
+            topics: vec![TopicLog::default(); tx_topics],
+            rx_ok: 0,
+            rx_bad: 0,
+            events: Vec::new(),
+        }
+    }
+
+    fn alloc(&mut self, size: usize, seq: u32, tx: u8) -> Token {
+        let idx = match self.free.pop() {
+            Some(i) => i,
+            None => {
+                self.slab.push(Vec::new());
+                (self.slab.len() - 1) as u16
+            }
+        };
+        if let Some(buf) = self.slab.get_mut(usize::from(idx)) {
+            buf.clear();
+            buf.resize(size, 0);
+            fill_payload(buf, seq, self.node, tx);
+        }
+        Token(idx)
+    }
+
+    fn release(&mut self, token: Token) {
+        self.free.push(token.0);
+    }
+
+    /// Local time of the next event (`None`: no event generator).
+    pub fn next_local(&self) -> Option<Nanos> {
+        self.gens
+            .iter()
+            .map(|g| g.next_global)
+            .filter(|&t| t != Nanos::MAX)
+            .min()
+            .map(|g| self.clock.local(g))
+    }
+
+    /// Next event due at local time `now`, as (topic, token, global event time).
+    pub fn take_due(&mut self, now: Nanos) -> Option<(u8, Token)> {
+        let clock = self.clock;
+        let st = self
+            .gens
+            .iter_mut()
+            .find(|g| g.next_global != Nanos::MAX && clock.local(g.next_global) <= now)?;
+        let (tx, size, seq, at) = (st.gen.tx, st.gen.size, st.seq, st.next_global);
+        st.seq = st.seq.wrapping_add(1);
+        st.next_global = match st.gen.kind {
+            GenKind::Hrt => Nanos::MAX,
+            GenKind::Random { lo, hi } => at + st.rng.range(lo, hi).max(1),
+            GenKind::Periodic { period } => at + period.max(1),
+        };
+        if let Some(t) = self.topics.get_mut(usize::from(tx)) {
+            t.events.push(at);
+        }
+        Some((tx, self.alloc(size, seq, tx)))
+    }
+
+    /// The engine refused a submission.
+    pub fn refused(&mut self, tx: u8, token: Token) {
+        if let Some(t) = self.topics.get_mut(usize::from(tx)) {
+            t.refused += 1;
+        }
+        self.release(token);
+    }
+}
+
+impl Host for TrafficHost {
+    fn hrt_sample(&mut self, tx: u8) -> Option<Token> {
+        let t = self.topics.get_mut(usize::from(tx))?;
+        let seq = t.samples as u32;
+        t.samples += 1;
+        Some(self.alloc(8, seq, tx))
+    }
+
+    fn payload(&self, token: Token) -> &[u8] {
+        self.slab
+            .get(usize::from(token.0))
+            .map_or(&[], Vec::as_slice)
+    }
+
+    fn tx_done(&mut self, tx: u8, token: Option<Token>, outcome: TxOutcome) {
+        if outcome == TxOutcome::DeadlineMissed {
+            if let Some(t) = self.topics.get_mut(usize::from(tx)) {
+                t.dropped += 1;
+            }
+        }
+        if let Some(token) = token {
+            self.release(token);
+        }
+    }
+
+    fn deliver(&mut self, _rx: u8, payload: &[u8], _sof: Nanos) {
+        let seq = payload_seq(payload);
+        let (node, tx) = (
+            payload.get(4).copied().unwrap_or(0),
+            payload.get(5).copied().unwrap_or(0),
+        );
+        let mut expect = vec![0u8; payload.len()];
+        fill_payload(&mut expect, seq, node, tx);
+        if expect == payload {
+            self.rx_ok += 1;
+        } else {
+            self.rx_bad += 1;
+        }
+    }
+
+    fn event(&mut self, event: Event) {
+        if self.events.len() < 1000 {
+            self.events.push(event);
+        }
+    }
+}
+
+/// A module: the engine and a traffic host.
+pub struct EngineNode<'t> {
+    /// The protocol engine (boxed: its arena is large).
+    pub engine: Box<SimEngine<'t>>,
+    /// The generator.
+    pub host: TrafficHost,
+}
+
+impl<'t> EngineNode<'t> {
+    /// Engine on `tables` with `policy`, created at local time `now`.
+    pub fn new(tables: &'t OwnedTables, policy: Policy, host: TrafficHost, now: Nanos) -> Self {
+        let mut engine = Box::new(SimEngine::new(tables.view(), now));
+        engine.set_policy(policy);
+        EngineNode { engine, host }
+    }
+
+    fn next(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        let p = self.engine.poll(now, can, &mut self.host);
+        let p = (p != Nanos::MAX).then_some(p);
+        match (p, self.host.next_local()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+}
+
+impl Module for EngineNode<'_> {
+    fn start(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        self.next(now, can)
+    }
+
+    fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        while let Some((tx, token)) = self.host.take_due(now) {
+            if self
+                .engine
+                .submit(now, tx, token, can, &mut self.host)
+                .is_err()
+            {
+                self.host.refused(tx, token);
+            }
+        }
+        self.next(now, can)
+    }
+
+    fn rx(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        self.engine.on_rx(frame, sof, can, &mut self.host);
+        self.next(now, can)
+    }
+
+    fn tx_done(
+        &mut self,
+        mailbox: Mailbox,
+        result: TxResult,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        self.engine
+            .on_tx_done(mailbox, result, now, can, &mut self.host);
+        self.next(now, can)
+    }
+
+    fn rx_overrun(&mut self, _now: Nanos) {
+        self.engine.on_rx_overrun();
+    }
+}

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# The project's test command (README): host tests, then on-target tests under QEMU,
+# then the firmware images and their size budgets. Fails on the first failure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+echo "== host tests (cargo test --workspace)"
+cargo test --workspace
+
+echo "== on-target tests under QEMU (Cortex-M3, lm3s6965evb)"
+bash boards/run-qemu.sh
+
+echo "== Triskar2 firmware images and size budgets"
+bash examples/triskar2/size-check.sh
