@@ -92,8 +92,20 @@ fn progress(done: usize, total: usize) {
     }
 }
 
-fn speed_line(sim_s: f64, wall: f64) -> String {
-    format!("speed: {sim_s:.1} s simulated in {wall:.3} s wall = {:.0}x real time (one core)", sim_s / wall.max(1e-9))
+fn speed_line(sim_s: f64, wall: f64, cpu: Option<f64>) -> String {
+    let mut s = format!("speed: {sim_s:.1} s simulated in {wall:.3} s wall = {:.0}x real time", sim_s / wall.max(1e-9));
+    if let Some(cpu) = cpu {
+        s.push_str(&format!("; {cpu:.3} s on CPU = {:.0}x real time per core", sim_s / cpu.max(1e-9)));
+    }
+    s
+}
+
+/// CPU time of this thread (Linux schedstat), so the speed figure does not depend on
+/// what else the machine runs.
+fn thread_cpu_s() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns / 1e9)
 }
 
 fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
@@ -130,9 +142,11 @@ fn run_paper(a: &Args) -> Result<(), String> {
     let sweep = if a.sweep { paper_sweep(&a.cfg, progress) } else { Vec::new() };
     // Speed of one engine run alone (the figure the README quotes).
     let t1 = Instant::now();
+    let c1 = thread_cpu_s();
     let sc = paper::scenario(paper::our_laxity(), a.cfg.load);
     let _ = run_engine(&sc, &SimConfig { record_wire: false, ..a.cfg.clone() }, PolicyKind::Ours, Policy::OURS);
     let one = t1.elapsed().as_secs_f64();
+    let cpu = thread_cpu_s().zip(c1).map(|(b, a)| b - a);
     if a.json {
         let pts: Vec<String> = sweep.iter().map(report::comparison_json).collect();
         println!(
@@ -141,7 +155,7 @@ fn run_paper(a: &Args) -> Result<(), String> {
             a.cfg.seed,
             report::comparison_json(&cmp),
             pts.join(","),
-            a.cfg.seconds / one.max(1e-9)
+            a.cfg.seconds / cpu.unwrap_or(one).max(1e-9)
         );
     } else {
         println!("rtcan-paper: {} s simulated, seed {}\n", a.cfg.seconds, a.cfg.seed);
@@ -155,7 +169,7 @@ fn run_paper(a: &Args) -> Result<(), String> {
             print!("{}", report::comparison_text(c));
         }
         println!();
-        println!("{}", speed_line(a.cfg.seconds, one));
+        println!("{}", speed_line(a.cfg.seconds, one, cpu));
         println!("(all four policies: {wall:.3} s wall)");
     }
     if let Some(dir) = &a.out {
@@ -197,8 +211,10 @@ fn run_robot(a: &Args, path: &Path, traffic: &[robot::Traffic]) -> Result<(), St
 fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> Result<(), String> {
     let sc = robot::scenario(plan, traffic)?;
     let t0 = Instant::now();
+    let c0 = thread_cpu_s();
     let run = run_engine(&sc, &a.cfg, PolicyKind::Ours, Policy::OURS);
     let wall = t0.elapsed().as_secs_f64();
+    let cpu = thread_cpu_s().zip(c0).map(|(b, a)| b - a);
     if a.json {
         println!(
             "{{\"robot\":\"{}\",\"seconds\":{},\"seed\":{},\"run\":{},\"speed_x_real_time\":{:.1}}}",
@@ -206,12 +222,12 @@ fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> R
             a.cfg.seconds,
             a.cfg.seed,
             report::run_json(&run),
-            a.cfg.seconds / wall.max(1e-9)
+            a.cfg.seconds / cpu.unwrap_or(wall).max(1e-9)
         );
     } else {
         println!("{}: {} s simulated, seed {}\n", plan.file, a.cfg.seconds, a.cfg.seed);
         print!("{}", report::text(&run));
-        println!("{}", speed_line(a.cfg.seconds, wall));
+        println!("{}", speed_line(a.cfg.seconds, wall, cpu));
     }
     if let Some(dir) = &a.out {
         outputs(dir, &sc, &run)?;

@@ -102,6 +102,38 @@ enum Loaded {
     },
 }
 
+/// Where the slot sequence stands: the cycle being executed and a linear map from its
+/// bus time to local time. Boundaries are computed from the map with one multiply and a
+/// shift, so the per-slot path does no 64-bit division (a library call on Cortex-M3);
+/// the map is refreshed from the slot clock once per sync.
+#[derive(Clone, Copy, Debug)]
+struct Position {
+    /// Absolute cycle being executed.
+    abs_cycle: u64,
+    /// `abs_cycle` modulo the hyperperiod (in cycles).
+    cycle_in_hyper: u32,
+    /// `abs_cycle` modulo `cycle_counter_wrap` (the sync frame's counter).
+    counter: u32,
+    /// Next boundary to handle within `abs_cycle`; `slots_per_cycle` = the next cycle's slot 0.
+    next_slot: u8,
+    /// Local time of slot 0 of `abs_cycle`.
+    start_local: Nanos,
+    /// Bus time of slot 0 of `abs_cycle`.
+    start_bus: Nanos,
+    /// Local slot length, ns × 2^16.
+    slot_q16: u64,
+    /// Bus ns per local ns × 2^32.
+    inv_q32: u64,
+    /// Cycles until this module's next heartbeat.
+    heartbeat_in: u8,
+}
+
+impl Position {
+    fn boundary(&self, slot: u8) -> Nanos {
+        self.start_local + ((slot as u64 * self.slot_q16) >> 16)
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct HrtTransfer {
     tx: u8,
@@ -120,14 +152,12 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     /// Worst-case duration of a frame with DLC 0..=8, ns (precomputed: no division on
     /// the per-frame path).
     wc_ns: [Nanos; 9],
-    slots_per_hyper: u32,
-    // Slot position of the boundary `next_boundary` (the next one to handle).
+    /// Local time of the next boundary to handle (`pos.next_slot`); MAX when a slave is
+    /// not following the sync.
     next_boundary: Nanos,
-    next_abs_cycle: u64,
-    next_slot: u8,
-    next_hyper_slot: u32,
+    pos: Position,
     cursor: CalendarCursor,
-    // The cycle being executed.
+    /// Reservation mask of the cycle being executed.
     cycle_mask: u64,
     /// Absolute cycle whose reservation mask `cycle_mask` is (u64::MAX: none).
     mask_cycle: u64,
@@ -170,14 +200,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             clock,
             master,
             wc_ns,
-            slots_per_hyper: bus
-                .hyperperiod_cycles
-                .saturating_mul(bus.slots_per_cycle as u32)
-                .max(1),
             next_boundary: if master { start } else { Nanos::MAX },
-            next_abs_cycle: 0,
-            next_slot: 0,
-            next_hyper_slot: 0,
+            pos: Position {
+                abs_cycle: 0,
+                cycle_in_hyper: 0,
+                counter: 0,
+                next_slot: 0,
+                start_local: start,
+                start_bus: 0,
+                slot_q16: bus.slot_ns << 16,
+                inv_q32: 1 << 32,
+                heartbeat_in: tables.module % HEARTBEAT_CYCLES as u8,
+            },
             cursor: CalendarCursor::default(),
             cycle_mask: 0,
             mask_cycle: u64::MAX,
@@ -283,30 +317,20 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
-        let slot = self.next_slot;
-        let hyper_slot = self.next_hyper_slot;
-        let abs_cycle = self.next_abs_cycle;
-        let spc = self.tables.bus.slots_per_cycle;
-        // Advance first: whatever happens below, the next boundary is the next slot.
-        if slot + 1 >= spc {
-            self.next_slot = 0;
-            self.next_abs_cycle = abs_cycle + 1;
-        } else {
-            self.next_slot = slot + 1;
+        let bus = self.tables.bus;
+        let spc = bus.slots_per_cycle;
+        if self.pos.next_slot >= spc {
+            self.next_cycle();
         }
-        self.next_hyper_slot = if hyper_slot + 1 >= self.slots_per_hyper {
-            0
-        } else {
-            hyper_slot + 1
-        };
-        let next_bus =
-            (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
-        self.next_boundary = self.clock.to_local(next_bus);
+        let slot = self.pos.next_slot;
+        let hyper_slot = self.pos.cycle_in_hyper * spc as u32 + slot as u32;
+        self.pos.next_slot = slot + 1;
+        self.next_boundary = self.pos.boundary(slot + 1);
         self.window_end = 0;
 
         let own = self.cursor.take(self.tables.calendar, hyper_slot).copied();
         if slot == 0 {
-            self.start_cycle(abs_cycle, late, can, host);
+            self.start_cycle(late, can, host);
             return;
         }
         if late {
@@ -320,31 +344,52 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.load_hrt(entry.tx, entry.fragment, can, host);
             return;
         }
-        if self.mask_cycle != abs_cycle || self.cycle_mask & (1u64 << slot) != 0 {
+        if self.mask_cycle != self.pos.abs_cycle || self.cycle_mask & (1u64 << slot) != 0 {
             // Reserved by another module, or this cycle's mask is unknown (no sync yet):
             // stay silent.
             return;
         }
-        let run = free_run(self.cycle_mask, slot, spc) as u64;
-        let end_bus = (abs_cycle * spc as u64 + slot as u64 + run) * self.tables.bus.slot_ns;
-        self.window_end = self
-            .clock
-            .to_local(end_bus)
-            .saturating_sub(self.tables.bus.guard_ns);
+        let run = free_run(self.cycle_mask, slot, spc);
+        self.window_end = self.pos.boundary(slot + run).saturating_sub(bus.guard_ns);
         self.refill(now, can, host);
+    }
+
+    /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
+    fn next_cycle(&mut self) {
+        let bus = self.tables.bus;
+        let p = &mut self.pos;
+        p.start_local = p.boundary(bus.slots_per_cycle);
+        p.start_bus += bus.cycle_ns();
+        p.abs_cycle += 1;
+        p.cycle_in_hyper += 1;
+        if p.cycle_in_hyper >= bus.hyperperiod_cycles {
+            p.cycle_in_hyper = 0;
+        }
+        p.counter += 1;
+        if p.counter >= bus.cycle_counter_wrap {
+            p.counter = 0;
+        }
+        p.next_slot = 0;
+    }
+
+    /// Bus time of local time `local`: from the cycle map when close to the current
+    /// cycle (multiply and shift), else from the slot clock.
+    fn bus_time(&self, local: Nanos) -> Nanos {
+        match local.checked_sub(self.pos.start_local) {
+            Some(d) if d < 1 << 30 => self.pos.start_bus + ((d * self.pos.inv_q32) >> 32),
+            _ => self.clock.to_bus(local),
+        }
     }
 
     fn start_cycle(
         &mut self,
-        abs_cycle: u64,
         late: bool,
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
         let bus = self.tables.bus;
         if self.master {
-            let hyper = bus.hyperperiod_cycles.max(1) as u64;
-            let idx = (abs_cycle % hyper) as usize;
+            let idx = self.pos.cycle_in_hyper as usize;
             self.cycle_mask = self
                 .tables
                 .master_masks
@@ -352,9 +397,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 .copied()
                 .unwrap_or(u64::MAX)
                 | 1;
-            self.mask_cycle = abs_cycle;
-            let wrap = bus.cycle_counter_wrap.max(1) as u64;
-            let cycle = (abs_cycle % wrap) as u16;
+            self.mask_cycle = self.pos.abs_cycle;
+            let cycle = self.pos.counter as u16;
             if !late {
                 let frame = sync_frame(
                     Sync {
@@ -367,6 +411,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             }
         } else {
             // The mask of this cycle arrives with its sync frame (during slot 0).
+            let abs_cycle = self.pos.abs_cycle;
             if abs_cycle > self.last_sync_cycle + 1 {
                 Counters::bump(&mut self.counters.sync_missed);
             }
@@ -379,9 +424,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 return;
             }
         }
-        if (abs_cycle + self.tables.module as u64).is_multiple_of(HEARTBEAT_CYCLES) {
+        if self.pos.heartbeat_in == 0 {
+            self.pos.heartbeat_in = HEARTBEAT_CYCLES as u8;
             self.heartbeat_pending = true;
         }
+        self.pos.heartbeat_in -= 1;
     }
 
     fn load_any(&mut self, what: Loaded, frame: &Frame, can: &mut impl Controller) -> bool {
@@ -458,7 +505,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if self.window_end <= now {
             return;
         }
-        let now_bus = self.clock.to_bus(now);
+        let now_bus = self.bus_time(now);
         let remaining = self.window_end - now;
         while let Some(free) = self.mailboxes.iter().position(|m| *m == Loaded::Free) {
             let Some((key, item)) = self.pick(now_bus, remaining, host) else {
@@ -671,26 +718,34 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if !self.clock.on_sync(sof, sync.cycle) {
             return;
         }
-        let cycle_ns = self.tables.bus.cycle_ns().max(1);
+        let bus = self.tables.bus;
+        let cycle_ns = bus.cycle_ns().max(1);
         let abs_cycle = self.clock.to_bus(sof).saturating_add(cycle_ns / 2) / cycle_ns;
         self.last_sync_cycle = abs_cycle;
         self.cycle_mask = sync.mask;
         self.mask_cycle = abs_cycle;
-        let hyper = self.tables.bus.hyperperiod_cycles.max(1) as u64;
-        let ahead = abs_cycle > self.next_abs_cycle
-            || (abs_cycle == self.next_abs_cycle && self.next_slot == 0);
-        if !was_synced || ahead {
+        if !was_synced || abs_cycle != self.pos.abs_cycle {
             // (Re)start the slot sequence at slot 1 of this cycle: first lock, or the sync
-            // came before this node's own slot-0 boundary (its clock ran slow).
-            self.next_abs_cycle = abs_cycle;
-            self.next_slot = 1;
-            self.next_hyper_slot = ((abs_cycle % hyper) * spc as u64 + 1) as u32;
+            // is not for the cycle this node is executing (its clock ran slow, or a jump).
+            let hyper = bus.hyperperiod_cycles.max(1) as u64;
+            let wrap = bus.cycle_counter_wrap.max(1) as u64;
+            self.pos.abs_cycle = abs_cycle;
+            self.pos.cycle_in_hyper = (abs_cycle % hyper) as u32;
+            self.pos.counter = (abs_cycle % wrap) as u32;
+            self.pos.next_slot = 1;
             self.cursor = CalendarCursor::default();
         }
-        let next_bus =
-            (self.next_abs_cycle * spc as u64 + self.next_slot as u64) * self.tables.bus.slot_ns;
-        self.next_boundary = self.clock.to_local(next_bus);
-        if !was_synced {
+        // Refresh the cycle map from the slot clock (the only 64-bit divisions, once per
+        // cycle): offset from this SOF, slot length from the estimated rate.
+        let start_bus = abs_cycle * cycle_ns;
+        let start_local = self.clock.to_local(start_bus);
+        let cycle_local = self.clock.to_local(start_bus + cycle_ns).saturating_sub(start_local).max(1);
+        self.pos.start_bus = start_bus;
+        self.pos.start_local = start_local;
+        self.pos.slot_q16 = (cycle_local << 16) / bus.slots_per_cycle.max(1) as u64;
+        self.pos.inv_q32 = (cycle_ns << 32) / cycle_local;
+        self.next_boundary = self.pos.boundary(self.pos.next_slot);
+        if !was_synced && self.is_synced() {
             host.event(Event::Synced);
         }
     }
@@ -804,7 +859,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let fragment = fragment_count(payload.len()).saturating_sub(1);
         let (key, deadline) = match topic.class {
             Class::Srt => {
-                let d = self.clock.to_bus(now).saturating_add(topic.deadline_ns);
+                let d = self.bus_time(now).saturating_add(topic.deadline_ns);
                 (d, d)
             }
             _ => (NRT_KEY, NRT_KEY),

@@ -13,7 +13,7 @@ use rtcan_core::time::Nanos;
 
 use crate::handle::Loan;
 use crate::message::Message;
-use crate::topic::{Topic, TopicStats};
+use crate::topic::{Remote, Topic, TopicStats};
 
 /// `alloc` found the pool empty (counted in `TopicStats::pool_exhausted`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,6 +78,13 @@ impl<'a, T: Message, const N: usize, const S: usize, const Q: usize> Publisher<'
     /// `alloc` + `publish`.
     #[inline]
     pub fn send(&self, value: T, now: Nanos) -> Result<(), SendError> {
+        if self.topic.remote() == Remote::None {
+            return if self.topic.send_local(value, now) {
+                Ok(())
+            } else {
+                Err(SendError::PoolExhausted)
+            };
+        }
         let loan = self.alloc(value).map_err(|_| SendError::PoolExhausted)?;
         self.publish(loan, now).map_err(|_| SendError::WouldBlock)
     }

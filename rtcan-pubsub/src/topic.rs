@@ -43,7 +43,7 @@ pub enum Remote {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TopicStats {
-    /// Messages published (locally or received from the bus).
+    /// Messages published (locally or received from the bus); wraps.
     pub published: u32,
     /// `alloc` found no free block.
     pub pool_exhausted: u32,
@@ -266,6 +266,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     }
 
     /// How this topic leaves the module.
+    #[inline]
     pub fn remote(&self) -> Remote {
         self.remote
     }
@@ -339,26 +340,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                 }
                 return false;
             }
-            if let Some(s) = st.pool.stamps.get_mut(usize::from(idx)) {
-                *s = now;
-            }
-            let mut refs: u8 = 0;
-            for sub in st.subs.iter_mut() {
-                if sub.ring.is_full() {
-                    // A slow subscriber loses its oldest message, counted; the publisher
-                    // and the other subscribers are not affected.
-                    if let Some(old) = sub.ring.pop() {
-                        st.pool.unref(old);
-                    }
-                    bump(&mut sub.overflows);
-                }
-                if sub.ring.push(idx) {
-                    refs += 1;
-                }
-                if let Some(w) = sub.waker.take() {
-                    w.wake();
-                }
-            }
+            let mut refs = fan_out(st, idx, now);
             match self.remote {
                 Remote::None => {}
                 Remote::Hrt => {
@@ -381,7 +363,6 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     }
                 }
             }
-            bump(&mut st.stats.published);
             // The publisher's reference becomes the queues' references.
             st.pool.set_refs(idx, refs);
             true
@@ -392,6 +373,24 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
             }
         }
         accepted
+    }
+
+    /// Alloc + write + publish of a local-only topic in one critical section: the
+    /// hot path of local publish (nothing to encode, nobody to refuse).
+    #[inline(always)]
+    pub(crate) fn send_local(&self, value: T, now: Nanos) -> bool {
+        self.with(|st| {
+            let Some(idx) = st.pool.alloc() else {
+                bump(&mut st.stats.pool_exhausted);
+                return false;
+            };
+            // SAFETY: the block was free; nothing else can reach it inside this
+            // critical section before `fan_out` hands it to the subscribers.
+            unsafe { (*self.value_cell(idx).get()).write(value) };
+            let refs = fan_out(st, idx, now);
+            st.pool.set_refs(idx, refs);
+            true
+        })
     }
 
     // ---- subscribers ------------------------------------------------------
@@ -553,6 +552,39 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
             None => self.with(|st| bump(&mut st.stats.rx_dropped)),
         }
     }
+}
+
+/// Queues block `idx` to every local subscriber, stamped `now`; returns how many
+/// references the queues took. Counts the publish.
+#[inline(always)]
+fn fan_out<const N: usize, const S: usize, const Q: usize>(
+    st: &mut State<N, S, Q>,
+    idx: u8,
+    now: Nanos,
+) -> u8 {
+    if let Some(s) = st.pool.stamps.get_mut(usize::from(idx)) {
+        *s = now;
+    }
+    let mut refs: u8 = 0;
+    for sub in st.subs.iter_mut() {
+        if sub.ring.is_full() {
+            // A slow subscriber loses its oldest message, counted; the publisher and
+            // the other subscribers are not affected.
+            if let Some(old) = sub.ring.pop() {
+                st.pool.unref(old);
+            }
+            bump(&mut sub.overflows);
+        }
+        if sub.ring.push(idx) {
+            refs += 1;
+        }
+        if let Some(w) = sub.waker.take() {
+            w.wake();
+        }
+    }
+    // Wrapping: a rate counter, read as differences (saturating costs the hot path).
+    st.stats.published = st.stats.published.wrapping_add(1);
+    refs
 }
 
 /// Mask bit of block `idx` (< 32).

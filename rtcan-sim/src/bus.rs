@@ -145,6 +145,8 @@ struct Node<M> {
     can: SimController,
     setup: NodeSetup,
     wake_gen: u64,
+    /// Global time of the armed wake-up.
+    wake_at: Option<Nanos>,
 }
 
 /// The simulated bus with its nodes.
@@ -210,6 +212,7 @@ impl<M: Module> Bus<M> {
             can,
             setup,
             wake_gen: 0,
+            wake_at: None,
         });
         self.nodes.len() - 1
     }
@@ -282,11 +285,17 @@ impl<M: Module> Bus<M> {
         let local = node.setup.clock.local(now);
         let next = f(&mut node.module, local, &mut node.can);
         let lat = node.setup.irq_latency_ns;
-        node.wake_gen += 1;
-        let gen = node.wake_gen;
         let wake_at = next.map(|l| node.setup.clock.global_at(l).saturating_add(lat).max(now));
+        // Re-arm only when the deadline moved (stale entries are skipped by generation).
+        let arm = if wake_at != node.wake_at {
+            node.wake_gen += 1;
+            node.wake_at = wake_at;
+            wake_at.map(|t| (t, node.wake_gen))
+        } else {
+            None
+        };
         let reports = std::mem::take(&mut node.can.reports);
-        if let Some(t) = wake_at {
+        if let Some((t, gen)) = arm {
             self.push(t, Ev::Wake { node: i, gen });
         }
         for (mb, r) in reports {
@@ -336,7 +345,9 @@ impl<M: Module> Bus<M> {
     fn handle(&mut self, ev: Ev) {
         match ev {
             Ev::Wake { node, gen } => {
-                if self.nodes.get(node).is_some_and(|n| n.wake_gen == gen) {
+                if let Some(n) = self.nodes.get_mut(node).filter(|n| n.wake_gen == gen) {
+                    // Fired: whatever the module asks next is a new deadline.
+                    n.wake_at = None;
                     self.callback(node, |m, now, can| m.wake(now, can));
                 }
             }

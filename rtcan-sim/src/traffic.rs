@@ -119,6 +119,8 @@ pub struct TrafficHost {
     node: u8,
     clock: NodeClock,
     gens: Vec<GenState>,
+    /// Earliest `next_global` of all generators (cached: asked after every event).
+    next_global: Nanos,
     slab: Vec<Vec<u8>>,
     free: Vec<u16>,
     /// Per transmit topic.
@@ -134,7 +136,7 @@ pub struct TrafficHost {
 impl TrafficHost {
     /// Generators `gens` for node `node` (whose clock is `clock`), streams from `seed`.
     pub fn new(node: u8, clock: NodeClock, gens: &[Gen], tx_topics: usize, seed: u64) -> Self {
-        let gens = gens
+        let gens: Vec<GenState> = gens
             .iter()
             .map(|g| {
                 let mut rng = Rng::new(seed, (u64::from(node) << 8) | u64::from(g.tx));
@@ -151,10 +153,12 @@ impl TrafficHost {
                 }
             })
             .collect();
+        let next_global = gens.iter().map(|g: &GenState| g.next_global).min().unwrap_or(Nanos::MAX);
         TrafficHost {
             node,
             clock,
             gens,
+            next_global,
             slab: Vec::new(),
             free: Vec::new(),
             topics: vec![TopicLog::default(); tx_topics],
@@ -186,16 +190,18 @@ impl TrafficHost {
 
     /// Local time of the next event (`None`: no event generator).
     pub fn next_local(&self) -> Option<Nanos> {
-        self.gens
-            .iter()
-            .map(|g| g.next_global)
-            .filter(|&t| t != Nanos::MAX)
-            .min()
-            .map(|g| self.clock.local(g))
+        (self.next_global != Nanos::MAX).then(|| self.clock.local(self.next_global))
+    }
+
+    fn update_next(&mut self) {
+        self.next_global = self.gens.iter().map(|g| g.next_global).min().unwrap_or(Nanos::MAX);
     }
 
     /// Next event due at local time `now`, as (topic, token, global event time).
     pub fn take_due(&mut self, now: Nanos) -> Option<(u8, Token)> {
+        if self.next_global == Nanos::MAX || self.clock.local(self.next_global) > now {
+            return None;
+        }
         let clock = self.clock;
         let st = self
             .gens
@@ -211,6 +217,7 @@ impl TrafficHost {
         if let Some(t) = self.topics.get_mut(usize::from(tx)) {
             t.events.push(at);
         }
+        self.update_next();
         Some((tx, self.alloc(size, seq, tx)))
     }
 
