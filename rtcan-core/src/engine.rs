@@ -13,7 +13,7 @@ use crate::calendar::{free_run, CalendarCursor};
 use crate::clock::SlotClock;
 use crate::counters::Counters;
 use crate::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult, MAILBOXES};
-use crate::fragment::{crc16, fragment_count, fragment_data, RxState, RxStep};
+use crate::fragment::{crc16_update, fragment_count, fragment_data, RxState, RxStep, CRC16_INIT};
 use crate::frame::Frame;
 use crate::heartbeat::{heartbeat_frame, parse_heartbeat, Heartbeat};
 use crate::id::{CanId, Class, FIRST_TOPIC_MSG_ID, HEARTBEAT_BASE, LAXITY_HRT, LAXITY_NRT};
@@ -27,7 +27,7 @@ use crate::timing::{bits_to_ns, worst_case_bits};
 /// and reports `Event::SyncLost` (its slot clock can no longer be trusted).
 pub const SYNC_LOSS_CYCLES: u64 = 4;
 /// Every module sends its heartbeat once every this many cycles (staggered by module).
-pub const HEARTBEAT_CYCLES: u64 = 10;
+pub use crate::heartbeat::HEARTBEAT_PERIOD_CYCLES as HEARTBEAT_CYCLES;
 /// Queue key of NRT messages: after every SRT deadline, FIFO among themselves.
 const NRT_KEY: u64 = u64::MAX;
 
@@ -69,6 +69,35 @@ impl Policy {
     };
 }
 
+/// Transfer CRC computed as fragments are loaded (docs/PROTOCOL.md §7.2): the engine
+/// never hashes a whole message inside a slot handler, only the bytes of the frame it
+/// loads. `upto` makes a reload after an abort free.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct TxCrc {
+    value: u16,
+    upto: u16,
+}
+
+impl TxCrc {
+    const NEW: TxCrc = TxCrc { value: CRC16_INIT, upto: 0 };
+
+    /// Covers the payload bytes of fragment `counter`, then returns the CRC to use for
+    /// it (complete whenever the fragment reaches the CRC bytes: they follow the payload).
+    fn advance(&mut self, payload: &[u8], counter: u8) -> u16 {
+        let size = payload.len();
+        if size > 8 {
+            let count = fragment_count(size) as usize;
+            let start = 8 * count.saturating_sub(counter as usize + 1);
+            let end = (start + 8).min(size);
+            if let Some(bytes) = payload.get(self.upto as usize..end) {
+                self.value = crc16_update(self.value, bytes);
+                self.upto = end as u16;
+            }
+        }
+        self.value
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Item {
     /// A topic message: `fragment` is the counter of the next frame to send.
@@ -76,7 +105,7 @@ enum Item {
         tx: u8,
         token: Token,
         fragment: u8,
-        crc: u16,
+        crc: TxCrc,
         deadline: Nanos,
     },
     /// This module's heartbeat.
@@ -138,7 +167,7 @@ impl Position {
 struct HrtTransfer {
     tx: u8,
     token: Token,
-    crc: u16,
+    crc: TxCrc,
 }
 
 /// Engine of one module. `RX`: receive topics; `ARENA`: reassembly bytes; `Q`: SRT/NRT
@@ -463,11 +492,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
             }
             match host.hrt_sample(tx) {
-                Some(token) => {
-                    let payload = host.payload(token);
-                    let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
-                    self.hrt = Some(HrtTransfer { tx, token, crc });
-                }
+                Some(token) => self.hrt = Some(HrtTransfer { tx, token, crc: TxCrc::NEW }),
                 None => {
                     Counters::bump(&mut self.counters.hrt_empty);
                     host.tx_done(tx, None, TxOutcome::NothingToSend);
@@ -475,11 +500,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 }
             }
         }
-        let Some(x) = self.hrt.filter(|x| x.tx == tx) else {
+        let Some(x) = self.hrt.as_mut().filter(|x| x.tx == tx) else {
             return;
         };
+        let payload = host.payload(x.token);
+        let crc = x.crc.advance(payload, fragment);
+        let token = x.token;
         let mut data = [0u8; 8];
-        let dlc = fragment_data(host.payload(x.token), x.crc, fragment, &mut data);
+        let dlc = fragment_data(payload, crc, fragment, &mut data);
         let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else {
             return;
         };
@@ -489,7 +517,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if !self.load_any(
             Loaded::Hrt {
                 tx,
-                token: x.token,
+                token,
                 fragment,
             },
             &frame,
@@ -508,7 +536,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let now_bus = self.bus_time(now);
         let remaining = self.window_end - now;
         while let Some(free) = self.mailboxes.iter().position(|m| *m == Loaded::Free) {
-            let Some((key, item)) = self.pick(now_bus, remaining, host) else {
+            let Some((key, mut item)) = self.pick(now_bus, remaining, host) else {
                 break;
             };
             let (frame, dlc) = match item {
@@ -527,7 +555,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     tx,
                     token,
                     fragment,
-                    crc,
+                    ref mut crc,
                     deadline,
                 } => {
                     let Some(topic) = self.tables.tx.get(tx as usize) else {
@@ -545,8 +573,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                             }
                         }
                     };
+                    let payload = host.payload(token);
+                    let crc = crc.advance(payload, fragment);
                     let mut data = [0u8; 8];
-                    let dlc = fragment_data(host.payload(token), crc, fragment, &mut data);
+                    let dlc = fragment_data(payload, crc, fragment, &mut data);
                     let Some(id) = CanId::new(laxity, topic.msg_id, fragment) else {
                         continue;
                     };
@@ -855,7 +885,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             Counters::bump(&mut self.counters.queue_full);
             return Err(SubmitError::QueueFull);
         }
-        let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
+        let crc = TxCrc::NEW;
         let fragment = fragment_count(payload.len()).saturating_sub(1);
         let (key, deadline) = match topic.class {
             Class::Srt => {

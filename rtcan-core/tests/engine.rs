@@ -497,3 +497,42 @@ fn hrt_slot_with_nothing_to_send_is_reported() {
     assert_eq!(empty, 6, "H_B every 30 slots over 3 cycles");
     assert_eq!(bus.nodes[0].engine.counters().hrt_empty, 6);
 }
+
+#[test]
+fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_crc() {
+    // Master publishes a 30-byte HRT message (32 wire bytes, 4 fragments) in slots
+    // 10..=13 of every cycle; a slave receives it.
+    let size = 30u16;
+    let tx: &'static [TxTopic] =
+        Box::leak(Box::new([TxTopic { msg_id: MsgId(0x0150), class: Class::Hrt, size, deadline_ns: 0 }]));
+    let cal: &'static [CalEntry] = Box::leak(Box::new([
+        CalEntry { slot: 10, tx: 0, fragment: 3 },
+        CalEntry { slot: 11, tx: 0, fragment: 2 },
+        CalEntry { slot: 12, tx: 0, fragment: 1 },
+        CalEntry { slot: 13, tx: 0, fragment: 0 },
+    ]));
+    let rx: &'static [RxTopic] = Box::leak(Box::new([RxTopic { msg_id: MsgId(0x0150), size, arena_offset: 0 }]));
+    let masks: &'static [u64] = Box::leak(Box::new([1u64 | 0b1111 << 10]));
+    let master = NodeTables { bus: bus(), module: 0, tx, rx: &[], calendar: cal, master_masks: masks };
+    let slave = NodeTables { bus: bus(), module: 1, tx: &[], rx, calendar: &[], master_masks: &[] };
+    let mut b = Bus::new(1_000_000);
+    b.add(master, 0.0, 0.0);
+    b.add(slave, -800.0, 42_000.0);
+    let payload: Vec<u8> = (0..size as u8).map(|i| i ^ 0x5A).collect();
+    b.nodes[0].host.hrt = vec![Some(payload.clone())];
+    b.run(T0 + 6 * 60 * SLOT_NS);
+    let frames: Vec<_> = b.log.iter().filter(|w| w.frame.id().msg_id() == MsgId(0x0150)).collect();
+    assert_eq!(frames.len(), 6 * 4);
+    for (i, w) in frames.iter().enumerate() {
+        let (_, slot) = slot_of(w.sof + 1_000);
+        assert_eq!(slot, 10 + (i % 4) as u64);
+        assert_eq!(w.frame.id().fragment(), 3 - (i % 4) as u8);
+    }
+    // Last fragment: payload bytes 24..30 then the CRC-16 (little-endian) of the payload.
+    let crc = rtcan_core::fragment::crc16(&payload).to_le_bytes();
+    assert_eq!(frames[3].frame.data(), &[payload[24], payload[25], payload[26], payload[27], payload[28], payload[29], crc[0], crc[1]]);
+    let got: Vec<_> = b.nodes[1].host.delivered.iter().map(|d| d.1.clone()).collect();
+    assert!(got.len() >= 4, "slave receives once locked: {}", got.len());
+    assert!(got.iter().all(|g| *g == payload));
+    assert_eq!(b.nodes[0].host.done.iter().filter(|d| d.2 == TxOutcome::Sent).count(), 6);
+}

@@ -1,1 +1,96 @@
-//! Proc macros.
+//! `rtcan::robot!("robot.toml")`: reads the robot description (path relative to the
+//! calling crate's `CARGO_MANIFEST_DIR`), runs the model (parse, validate, plan) and the
+//! code generator, and expands to the generated items, or to one `compile_error!` per
+//! diagnostic, rendered rustc-style with the robot.toml excerpt.
+//!
+//! ```ignore
+//! rtcan::robot!("robot.toml");
+//! rtcan::robot!("robot.toml", kick = crate::pend_can_pump);
+//! ```
+use proc_macro::TokenStream;
+use proc_macro2::Span;
+use quote::quote;
+use std::path::PathBuf;
+use syn::parse::{Parse, ParseStream};
+use syn::{LitStr, Path, Token};
+
+struct Input {
+    file: LitStr,
+    kick: Option<Path>,
+}
+
+impl Parse for Input {
+    fn parse(input: ParseStream) -> syn::Result<Self> {
+        let file: LitStr = input.parse()?;
+        let mut kick = None;
+        while input.peek(Token![,]) {
+            input.parse::<Token![,]>()?;
+            if input.is_empty() {
+                break;
+            }
+            let key: syn::Ident = input.parse()?;
+            if key != "kick" {
+                return Err(syn::Error::new(
+                    key.span(),
+                    "unknown option; expected `kick = path::to::fn`",
+                ));
+            }
+            input.parse::<Token![=]>()?;
+            kick = Some(input.parse()?);
+        }
+        Ok(Input { file, kick })
+    }
+}
+
+/// Generates a robot's types, topic constants, per-module tables, filters, pools and
+/// typed handles from a robot.toml (see the `rtcan` crate docs and rtcan-codegen/README.md).
+#[proc_macro]
+pub fn robot(input: TokenStream) -> TokenStream {
+    let input = match syn::parse::<Input>(input) {
+        Ok(i) => i,
+        Err(e) => return e.to_compile_error().into(),
+    };
+    expand(&input).into()
+}
+
+fn expand(input: &Input) -> proc_macro2::TokenStream {
+    let span = input.file.span();
+    let rel = input.file.value();
+    let base = std::env::var_os("CARGO_MANIFEST_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_default();
+    let abs = base.join(&rel);
+    let source = match std::fs::read_to_string(&abs) {
+        Ok(s) => s,
+        Err(e) => {
+            return error(
+                span,
+                &format!("cannot read `{}`: {e}", abs.display()),
+            )
+        }
+    };
+    // Diagnostics name the file as written, so messages are the same on every machine.
+    let analysis = rtcan_model::analyze(&rel, &source);
+    let plan = match analysis.plan {
+        Some(p) if analysis.diagnostics.is_empty() => p,
+        _ => {
+            let d = &analysis.diagnostics;
+            let errs = d.items.iter().map(|item| error(span, d.render_one(item).trim_end()));
+            return quote! { #(#errs)* };
+        }
+    };
+    let opts = rtcan_codegen::Options {
+        kick: input.kick.as_ref().map(|k| quote!(#k)),
+    };
+    let code = rtcan_codegen::generate(&plan, &opts);
+    let abs_str = abs.display().to_string();
+    quote! {
+        // Rebuild when the robot description changes.
+        const _: &[u8] = include_bytes!(#abs_str);
+        #code
+    }
+}
+
+fn error(span: Span, msg: &str) -> proc_macro2::TokenStream {
+    quote::quote_spanned! { span => ::core::compile_error!(#msg); }
+}

@@ -120,14 +120,14 @@ enum Ev {
     Wake { node: usize, gen: u64 },
     ArbDecide,
     FrameEnd,
-    Idle,
     RxIrq { node: usize, fifo: usize },
     TxIrq { node: usize, mb: u8, result: u8 },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
-    Idle,
+    /// Free from the given time on (the intermission of the last frame ends there).
+    Idle { from: Nanos },
     Arbitrating {
         sof: Nanos,
     },
@@ -147,6 +147,8 @@ struct Node<M> {
     wake_gen: u64,
     /// Global time of the armed wake-up.
     wake_at: Option<Nanos>,
+    /// Last requested local wake-up and its global time (the inverse clock is costly).
+    last_req: Option<(Nanos, Nanos)>,
 }
 
 /// The simulated bus with its nodes.
@@ -194,7 +196,7 @@ impl<M: Module> Bus<M> {
             nodes: Vec::new(),
             queue: BinaryHeap::new(),
             seq: 0,
-            state: State::Idle,
+            state: State::Idle { from: 0 },
             now: 0,
             rng: Rng::new(seed, 0xB05),
             started: false,
@@ -213,6 +215,7 @@ impl<M: Module> Bus<M> {
             setup,
             wake_gen: 0,
             wake_at: None,
+            last_req: None,
         });
         self.nodes.len() - 1
     }
@@ -285,7 +288,17 @@ impl<M: Module> Bus<M> {
         let local = node.setup.clock.local(now);
         let next = f(&mut node.module, local, &mut node.can);
         let lat = node.setup.irq_latency_ns;
-        let wake_at = next.map(|l| node.setup.clock.global_at(l).saturating_add(lat).max(now));
+        let wake_at = next.map(|l| {
+            let g = match node.last_req {
+                Some((req, g)) if req == l => g,
+                _ => {
+                    let g = node.setup.clock.global_at(l);
+                    node.last_req = Some((l, g));
+                    g
+                }
+            };
+            g.saturating_add(lat).max(now)
+        });
         // Re-arm only when the deadline moved (stale entries are skipped by generation).
         let arm = if wake_at != node.wake_at {
             node.wake_gen += 1;
@@ -312,10 +325,14 @@ impl<M: Module> Bus<M> {
     }
 
     fn maybe_start_arbitration(&mut self) {
-        if self.state == State::Idle && self.nodes.iter().any(|n| n.can.has_pending()) {
-            self.state = State::Arbitrating { sof: self.now };
-            let t = self.now + self.bit_ns();
-            self.push(t, Ev::ArbDecide);
+        if let State::Idle { from } = self.state {
+            if self.nodes.iter().any(|n| n.can.has_pending()) {
+                // Pending frames wait for the intermission to end, then start together.
+                let sof = from.max(self.now);
+                self.state = State::Arbitrating { sof };
+                let t = sof + self.bit_ns();
+                self.push(t, Ev::ArbDecide);
+            }
         }
     }
 
@@ -353,10 +370,6 @@ impl<M: Module> Bus<M> {
             }
             Ev::ArbDecide => self.arbitrate(),
             Ev::FrameEnd => self.frame_end(),
-            Ev::Idle => {
-                self.state = State::Idle;
-                self.maybe_start_arbitration();
-            }
             Ev::RxIrq { node, fifo } => self.rx_irq(node, fifo),
             Ev::TxIrq { node, mb, result } => {
                 self.callback(node, |m, now, can| {
@@ -382,7 +395,7 @@ impl<M: Module> Bus<M> {
             .collect();
         let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
             // Everything was aborted during the SOF bit.
-            self.state = State::Idle;
+            self.state = State::Idle { from: self.now };
             return;
         };
         if offers.len() > 1 {
@@ -531,7 +544,8 @@ impl<M: Module> Bus<M> {
         for (t, ev) in irqs {
             self.push(t, ev);
         }
-        self.push(now + ifs, Ev::Idle);
+        self.state = State::Idle { from: now + ifs };
+        self.maybe_start_arbitration();
     }
 
     fn rx_irq(&mut self, n: usize, fifo: usize) {

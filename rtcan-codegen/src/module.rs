@@ -1,0 +1,348 @@
+//! `pub mod <module>`: one module's engine tables, CAN filters, engine sizes, topic
+//! statics, typed node handles and `ModuleHost` glue.
+use crate::{lit, names, tables, Options};
+use proc_macro2::TokenStream;
+use quote::quote;
+use rtcan_core::Class;
+use rtcan_model::filters::{BankPurpose, FilterBank};
+use rtcan_model::{ModulePlan, Plan, TopicPlan};
+
+/// Largest pool `rtcan_pubsub::Topic` supports (one `u32` free mask).
+const MAX_POOL: usize = 32;
+
+/// A topic as one module holds it.
+struct Local<'p> {
+    topic: &'p TopicPlan,
+    /// Local subscriber nodes, in robot.toml order (index = subscriber slot).
+    subs: Vec<usize>,
+    /// Queue length of every local subscriber and of the queue towards the engine:
+    /// `rtcan_pubsub::Topic` has one `Q` per topic, so it is the topic's longest queue.
+    queue: u16,
+    /// Sent on the bus from this module.
+    remote: Option<Class>,
+}
+
+impl Local<'_> {
+    /// Blocks the engine side may hold (see `rtcan_pubsub::pool_blocks`).
+    fn remote_blocks(&self) -> usize {
+        match self.remote {
+            None => 0,
+            Some(Class::Hrt) => 2,
+            Some(_) => usize::from(self.queue) + 1,
+        }
+    }
+}
+
+fn locals(plan: &Plan, mi: usize) -> Vec<Local<'_>> {
+    plan.topics
+        .iter()
+        .filter(|t| t.module == mi || t.subscribers.iter().any(|s| s.module == mi))
+        .map(|t| Local {
+            topic: t,
+            subs: t
+                .subscribers
+                .iter()
+                .filter(|s| s.module == mi)
+                .map(|s| s.node)
+                .collect(),
+            queue: t.subscribers.iter().map(|s| s.queue).max().unwrap_or(1).max(1),
+            remote: (t.module == mi && t.on_bus).then_some(t.class),
+        })
+        .collect()
+}
+
+/// (banks, flat `(id, mask)` pairs, doc line per bank).
+fn filters(m: &ModulePlan, plan: &Plan) -> (Vec<TokenStream>, Vec<TokenStream>, String) {
+    let mut docs = String::new();
+    let mut banks = Vec::new();
+    let mut flat = Vec::new();
+    for b in &m.banks {
+        let doc = match &b.purpose {
+            BankPurpose::Sync => "sync frame".to_string(),
+            BankPurpose::Heartbeat => "heartbeats".to_string(),
+            BankPurpose::AcceptAll => "everything (software filtering by the RX table)".into(),
+            BankPurpose::Topics(ts) => {
+                let names: Vec<&str> = ts
+                    .iter()
+                    .filter_map(|t| plan.topics.get(*t))
+                    .map(|t| t.name.as_str())
+                    .collect();
+                format!("topics {}", names.join(", "))
+            }
+        };
+        docs.push_str(&format!("\n{}. {doc}", banks.len()));
+        match b.filter {
+            FilterBank::Mask { id, mask } => {
+                let (i, k) = (lit::hex(u64::from(id)), lit::hex(u64::from(mask)));
+                banks.push(quote! { ::rtcan::FilterBank::Mask { id: #i, mask: #k } });
+                flat.push(quote! { (#i, #k) });
+            }
+            FilterBank::List { ids: [a, b] } => {
+                let (a, b) = (lit::hex(u64::from(a)), lit::hex(u64::from(b)));
+                let full = lit::hex(u64::from(rtcan_core::CanId::MAX_RAW));
+                banks.push(quote! { ::rtcan::FilterBank::List { ids: [#a, #b] } });
+                flat.push(quote! { (#a, #full) });
+                flat.push(quote! { (#b, #full) });
+            }
+        }
+    }
+    (banks, flat, docs)
+}
+
+/// The generated `pub mod <name>` of module `mi`.
+pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
+    let (Some(m), Some(t)) = (plan.modules.get(mi), plan.tables(mi)) else {
+        return quote!();
+    };
+    let name = names::ident(&m.name);
+    let index = lit::int(m.index);
+    let locals = locals(plan, mi);
+    let kick = match &opts.kick {
+        Some(k) => quote!(::core::option::Option::Some(#k as fn())),
+        None => quote!(::core::option::Option::None),
+    };
+
+    // ---- topic statics ----
+    let topic_items = locals.iter().map(|l| {
+        let c = names::upper(&l.topic.name);
+        let pool = names::ident(&format!("{}_POOL", l.topic.name.to_ascii_uppercase()));
+        let alias = names::camel_suffixed(&l.topic.name, "Topic");
+        let ty = plan
+            .types
+            .get(l.topic.ty)
+            .map(|t| names::ident(&t.name))
+            .unwrap_or_else(|| names::ident("u8"));
+        let (s, q, r) = (lit::usize(l.subs.len()), lit::int(l.queue), lit::usize(l.remote_blocks()));
+        let remote = match l.remote {
+            None => quote!(None),
+            Some(Class::Hrt) => quote!(Hrt),
+            Some(Class::Srt) => quote!(Srt),
+            Some(Class::Nrt) => quote!(Nrt),
+        };
+        let too_big = format!(
+            "topic `{}` on module `{}` needs more than {MAX_POOL} pool blocks: shorten its subscriber queues",
+            l.topic.name, m.name
+        );
+        let max = lit::usize(MAX_POOL);
+        let doc = format!(
+            "Topic `{}` on this module: {} local subscriber(s), queues of {}, {}.",
+            l.topic.name,
+            l.subs.len(),
+            l.queue,
+            match (l.remote, l.topic.module == mi && l.topic.on_bus) {
+                (Some(_), _) => "sent on the bus",
+                (None, _) if l.topic.module == mi => "local only",
+                _ => "received from the bus",
+            }
+        );
+        quote! {
+            /// Pool blocks of the topic below (`rtcan::pubsub::pool_blocks`).
+            pub const #pool: usize = ::rtcan::pubsub::pool_blocks(#s, #q, #r, 1);
+            const _: () = ::core::assert!(#pool <= #max, #too_big);
+            #[doc = #doc]
+            pub type #alias = ::rtcan::pubsub::Topic<super::super::#ty, #pool, #s, #q>;
+            #[doc = #doc]
+            pub static #c: #alias = ::rtcan::pubsub::Topic::new(::rtcan::pubsub::Remote::#remote, #kick);
+        }
+    });
+    let tx_consts = m.tx.iter().enumerate().filter_map(|(k, ti)| {
+        let t = plan.topics.get(*ti)?;
+        let c = names::ident(&format!("TX_{}", t.name.to_ascii_uppercase()));
+        let k = lit::usize(k);
+        Some(quote! { /// Engine transmit index (`NodeTables::tx`).
+            pub const #c: u8 = #k; })
+    });
+    let rx_consts = m.rx.iter().enumerate().filter_map(|(k, ti)| {
+        let t = plan.topics.get(*ti)?;
+        let c = names::ident(&format!("RX_{}", t.name.to_ascii_uppercase()));
+        let k = lit::usize(k);
+        Some(quote! { /// Engine receive index (`NodeTables::rx`).
+            pub const #c: u8 = #k; })
+    });
+    let tx_ports: Vec<_> = m
+        .tx
+        .iter()
+        .filter_map(|ti| plan.topics.get(*ti))
+        .map(|t| names::upper(&t.name))
+        .collect();
+    let rx_ports: Vec<_> = m
+        .rx
+        .iter()
+        .filter_map(|ti| plan.topics.get(*ti))
+        .map(|t| names::upper(&t.name))
+        .collect();
+
+    // ---- nodes and their typed handles ----
+    let node_mods = m.nodes.iter().filter_map(|ni| {
+        let node = plan.nodes.get(*ni)?;
+        let nid = names::ident(&node.name);
+        let nname = &node.name;
+        let prio = lit::int(node.priority);
+        let handles = locals.iter().flat_map(|l| {
+            let t = l.topic;
+            let c = names::upper(&t.name);
+            let pool = names::ident(&format!("{}_POOL", t.name.to_ascii_uppercase()));
+            let ty = plan
+                .types
+                .get(t.ty)
+                .map(|x| names::ident(&x.name))
+                .unwrap_or_else(|| names::ident("u8"));
+            let (s, q) = (lit::usize(l.subs.len()), lit::int(l.queue));
+            let generics = quote! { 'static, super::super::super::#ty, { super::super::topics::#pool }, #s, #q };
+            let mut out = Vec::new();
+            if t.publisher == *ni {
+                let f = names::ident(&format!("{}_pub", t.name));
+                let doc = format!("Publisher of topic `{}` (the only one).", t.name);
+                out.push(quote! {
+                    #[doc = #doc]
+                    pub fn #f() -> ::rtcan::pubsub::Publisher<#generics> {
+                        super::super::topics::#c.publisher()
+                    }
+                });
+            }
+            if let Some(slot) = l.subs.iter().position(|s| s == ni) {
+                let f = names::ident(&format!("{}_sub", t.name));
+                let slot = lit::usize(slot);
+                let doc = format!("This node's subscription to topic `{}`.", t.name);
+                out.push(quote! {
+                    #[doc = #doc]
+                    pub fn #f() -> ::rtcan::pubsub::Subscriber<#generics> {
+                        super::super::topics::#c.subscriber::<#slot>()
+                    }
+                });
+            }
+            out
+        });
+        let doc = format!("Node `{nname}` (priority {}): its lifecycle and typed handles for exactly the topics it declares.", node.priority);
+        Some(quote! {
+            #[doc = #doc]
+            pub mod #nid {
+                /// Lifecycle (its state goes into the module's heartbeat).
+                pub static NODE: ::rtcan::pubsub::Node = ::rtcan::pubsub::Node::new(#nname);
+                /// Task priority from robot.toml (1 = lowest).
+                pub const PRIORITY: u8 = #prio;
+                #(#handles)*
+            }
+        })
+    });
+    let nnodes = lit::usize(m.nodes.len());
+    let node_refs: Vec<_> = m
+        .nodes
+        .iter()
+        .filter_map(|ni| plan.nodes.get(*ni))
+        .map(|n| names::ident(&n.name))
+        .collect();
+
+    // ---- engine tables ----
+    let tx = t.tx.iter().map(tables::tx);
+    let rx = t.rx.iter().map(tables::rx);
+    let cal = t.calendar.iter().map(tables::cal);
+    let (ntx, nrx, ncal) = (
+        lit::usize(t.tx.len()),
+        lit::usize(t.rx.len()),
+        lit::usize(t.calendar.len()),
+    );
+    let masks = if m.is_master {
+        quote!(&super::MASTER_MASKS)
+    } else {
+        quote!(&[])
+    };
+    let arena = lit::usize(m.rx_arena_bytes);
+    // The engine queue holds this module's heartbeat plus, per SRT/NRT topic it sends,
+    // as many messages as that topic's own queue towards the engine.
+    let queue: usize = 1 + locals
+        .iter()
+        .filter(|l| matches!(l.remote, Some(Class::Srt | Class::Nrt)))
+        .map(|l| usize::from(l.queue))
+        .sum::<usize>();
+    let queue = lit::usize(queue);
+    let (banks, flat, bank_docs) = filters(m, plan);
+    let banks_doc = format!(
+        "bxCAN filter banks (32-bit scale, 29-bit identifiers), in bank order: the sync frame, heartbeats and exactly this module's subscriptions.\n{bank_docs}"
+    );
+    let accept_all = m.filter_mode == rtcan_model::FilterMode::AcceptAll;
+    let is_master = m.is_master;
+    let doc = format!(
+        "Module `{}` (index {}, board {}{}).",
+        m.name,
+        m.index,
+        m.board.name(),
+        if m.is_master { ", bus master" } else { "" }
+    );
+    let mismatch = format!("module `{}`: tables do not match the engine's sizes", m.name);
+
+    quote! {
+        #[doc = #doc]
+        pub mod #name {
+            /// Module index (heartbeat message ID = `HEARTBEAT_BASE + INDEX`).
+            pub const INDEX: u8 = #index;
+            /// Sends the sync frame.
+            pub const IS_MASTER: bool = #is_master;
+            /// Topics this module sends on the bus, in message-ID order (index = tx index).
+            pub const TX: [::rtcan::core::TxTopic; #ntx] = [#(#tx),*];
+            /// Topics this module receives, sorted by message ID (index = rx index).
+            pub const RX: [::rtcan::core::RxTopic; #nrx] = [#(#rx),*];
+            /// This module's HRT slots over the hyperperiod, sorted by slot.
+            pub const CALENDAR: [::rtcan::core::CalEntry; #ncal] = [#(#cal),*];
+            /// Everything the engine of this module needs.
+            pub const TABLES: ::rtcan::core::NodeTables<'static> = ::rtcan::core::NodeTables {
+                bus: super::BUS,
+                module: INDEX,
+                tx: &TX,
+                rx: &RX,
+                calendar: &CALENDAR,
+                master_masks: #masks,
+            };
+            /// Receive topics (engine `RX`).
+            pub const RX_COUNT: usize = #nrx;
+            /// Reassembly arena bytes (engine `ARENA`).
+            pub const ARENA_BYTES: usize = #arena;
+            /// SRT/NRT transmit queue capacity (engine `Q`).
+            pub const QUEUE_CAPACITY: usize = #queue;
+            /// This module's engine.
+            pub type Engine<'t> = ::rtcan::core::Engine<'t, RX_COUNT, ARENA_BYTES, QUEUE_CAPACITY>;
+            /// A new engine on [`TABLES`] (`now`: local time).
+            pub fn engine(now: ::rtcan::core::Nanos) -> Engine<'static> {
+                ::rtcan::core::Engine::new(TABLES, now)
+            }
+            const _: () = ::core::assert!(::rtcan::tables_fit(&TABLES, RX_COUNT, ARENA_BYTES), #mismatch);
+            #[doc = #banks_doc]
+            pub const FILTER_BANKS: &[::rtcan::FilterBank] = &[#(#banks),*];
+            /// The same acceptance as `(id, mask)` pairs (a list bank is two exact pairs).
+            pub const FILTERS: &[(u32, u32)] = &[#(#flat),*];
+            /// One accept-everything bank (`filters = "accept-all"`): the RX table filters.
+            pub const ACCEPT_ALL: bool = #accept_all;
+
+            /// This module's topics: every topic its nodes publish or subscribe.
+            pub mod topics {
+                #(#topic_items)*
+                #(#tx_consts)*
+                #(#rx_consts)*
+            }
+
+            /// This module's nodes.
+            pub mod nodes {
+                #(#node_mods)*
+            }
+
+            /// Transmit topics in `TX` order, for `ModuleHost`.
+            pub static TX_PORTS: [&dyn ::rtcan::pubsub::TxPort; #ntx] = [#(&topics::#tx_ports),*];
+            /// Receive topics in `RX` order, for `ModuleHost`.
+            pub static RX_PORTS: [&dyn ::rtcan::pubsub::RxPort; #nrx] = [#(&topics::#rx_ports),*];
+            /// System status as seen from this module (sync, master heartbeat, fingerprints).
+            pub static STATUS: ::rtcan::pubsub::SystemStatus =
+                ::rtcan::pubsub::SystemStatus::new(::rtcan::pubsub::SafetyConfig {
+                    module: INDEX,
+                    master: super::MASTER,
+                    // Three missed master heartbeats.
+                    max_missed_cycles: (3 * ::rtcan::core::engine::HEARTBEAT_CYCLES) as u16,
+                });
+            /// The nodes whose worst state goes into this module's heartbeat.
+            pub static NODES: [&::rtcan::pubsub::Node; #nnodes] = [#(&nodes::#node_refs::NODE),*];
+            /// The engine's `Host`: dispatches tx/rx indices to this module's topics.
+            pub fn host() -> ::rtcan::pubsub::ModuleHost<'static> {
+                ::rtcan::pubsub::ModuleHost::new(&TX_PORTS, &RX_PORTS, &STATUS, &NODES)
+            }
+        }
+    }
+}
