@@ -27,7 +27,8 @@
 //! Exact backtracking with conflict-directed backjumping (CBJ):
 //! - phase `φi` only matters modulo `gcd(pi, pj)` for every other `j` (and the sync), so
 //!   the domain is `[0, Gi)` with `Gi = lcm_j gcd(pi, pj)`, a divisor of `pi`;
-//! - variables are ordered most constrained first (short period, then more fragments);
+//! - variables are ordered most constrained first: utilisation `f/p` descending (the
+//!   "largest item first" of bin packing), then short period first;
 //! - values are tried in increasing order (first fit); a conflict with run `k` jumps
 //!   straight past every value that still collides with `k`;
 //! - identical requests are interchangeable, so their phases are forced to increase
@@ -347,7 +348,7 @@ fn search(
     budget: u64,
 ) -> Outcome {
     let s = u64::from(slots_per_cycle);
-    // Static order: most constrained first (short period, then many fragments).
+    // Static order: most constrained first (see module docs).
     let mut order = Tab::<u16>::new();
     let mut n = 0usize;
     for i in members.iter() {
@@ -360,11 +361,13 @@ fn search(
             fragments: 1,
         })
     };
-    let key = |i: u16| {
-        let r = req(usize::from(i));
-        (r.period_slots, core::cmp::Reverse(r.fragments), i)
-    };
-    order.as_mut_slice(n).sort_unstable_by_key(|&i| key(i));
+    order.as_mut_slice(n).sort_unstable_by(|&a, &b| {
+        let (ra, rb) = (req(usize::from(a)), req(usize::from(b)));
+        // Utilisation f/p descending, then period ascending, then index.
+        let ua = u64::from(ra.fragments) * u64::from(rb.period_slots);
+        let ub = u64::from(rb.fragments) * u64::from(ra.period_slots);
+        ub.cmp(&ua).then(ra.period_slots.cmp(&rb.period_slots)).then(a.cmp(&b))
+    });
 
     // Per depth: period, fragments, domain size, sync gcd, "same as previous depth".
     let mut per = Tab::<u64>::new();

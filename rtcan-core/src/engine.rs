@@ -42,6 +42,71 @@ pub enum SubmitError {
     NotSubmittable,
 }
 
+/// A table set that does not fit the engine's const generics or is inconsistent.
+/// Generated tables are checked at compile time (`const _: () = assert!(...)`), so this
+/// is a build error, never a run-time surprise.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TablesError {
+    /// More receive topics than `RX`.
+    TooManyRx,
+    /// A reassembly buffer ends past `ARENA`.
+    ArenaTooSmall,
+    /// `rx` not sorted by message ID (binary search on receive).
+    RxNotSorted,
+    /// A calendar entry names a missing transmit topic, or the calendar is not sorted.
+    BadCalendar,
+    /// Slots per cycle outside 2..=64, zero slot length, bit rate or hyperperiod.
+    BadBus,
+}
+
+/// Checks `tables` against the engine sizes `rx`, `arena` (const: usable in a const assert).
+pub const fn check_tables(tables: &NodeTables<'_>, rx: usize, arena: usize) -> Result<(), TablesError> {
+    let bus = &tables.bus;
+    if bus.slots_per_cycle < 2
+        || bus.slots_per_cycle > 64
+        || bus.slot_ns == 0
+        || bus.bitrate == 0
+        || bus.hyperperiod_cycles == 0
+        || bus.cycle_counter_wrap == 0
+    {
+        return Err(TablesError::BadBus);
+    }
+    if tables.rx.len() > rx {
+        return Err(TablesError::TooManyRx);
+    }
+    // Slice patterns instead of indexing: const fn, and nothing that can panic.
+    let mut rest = tables.rx;
+    let mut prev: Option<u16> = None;
+    while let [t, tail @ ..] = rest {
+        if t.arena_offset as usize + crate::fragment::wire_len(t.size as usize) > arena {
+            return Err(TablesError::ArenaTooSmall);
+        }
+        if let Some(p) = prev {
+            if p >= t.msg_id.0 {
+                return Err(TablesError::RxNotSorted);
+            }
+        }
+        prev = Some(t.msg_id.0);
+        rest = tail;
+    }
+    let mut rest = tables.calendar;
+    let mut prev: Option<u32> = None;
+    while let [c, tail @ ..] = rest {
+        if c.tx as usize >= tables.tx.len() {
+            return Err(TablesError::BadCalendar);
+        }
+        if let Some(p) = prev {
+            if p >= c.slot {
+                return Err(TablesError::BadCalendar);
+            }
+        }
+        prev = Some(c.slot);
+        rest = tail;
+    }
+    Ok(())
+}
+
 /// SRT policy knobs, so the simulator can run the paper's published policy next to ours
 /// on the same engine (no protocol logic re-implemented elsewhere).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -254,6 +319,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             rx_state: [RxState::default(); RX],
             arena: [0; ARENA],
         }
+    }
+
+    /// Like `new`, after `check_tables`.
+    pub fn try_new(tables: NodeTables<'t>, now: Nanos) -> Result<Self, TablesError> {
+        check_tables(&tables, RX, ARENA)?;
+        Ok(Self::new(tables, now))
     }
 
     /// Selects the SRT policy (default `Policy::OURS`).

@@ -536,3 +536,26 @@ fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_crc() {
     assert!(got.iter().all(|g| *g == payload));
     assert_eq!(b.nodes[0].host.done.iter().filter(|d| d.2 == TxOutcome::Sent).count(), 6);
 }
+
+#[test]
+fn tables_that_do_not_fit_the_engine_are_rejected() {
+    use rtcan_core::engine::{check_tables, TablesError};
+    let p = paper(3);
+    assert_eq!(check_tables(&p.tables[1], 16, 512), Ok(()));
+    assert_eq!(check_tables(&p.tables[1], 4, 512), Err(TablesError::TooManyRx));
+    assert_eq!(check_tables(&p.tables[1], 16, 64), Err(TablesError::ArenaTooSmall));
+    let mut t = p.tables[1];
+    t.rx = Box::leak(vec![t.rx[1], t.rx[0]].into_boxed_slice());
+    assert_eq!(check_tables(&t, 16, 512), Err(TablesError::RxNotSorted));
+    let mut t = p.tables[1];
+    t.calendar = Box::leak(vec![CalEntry { slot: 3, tx: 9, fragment: 0 }].into_boxed_slice());
+    assert_eq!(check_tables(&t, 16, 512), Err(TablesError::BadCalendar));
+    let mut t = p.tables[1];
+    t.bus.slots_per_cycle = 65;
+    assert_eq!(check_tables(&t, 16, 512), Err(TablesError::BadBus));
+    assert!(TestEngine::try_new(t, 0).is_err());
+    // Usable in a const assertion, as the generated code does.
+    const EMPTY: NodeTables<'static> =
+        NodeTables { bus: BusConfig { bitrate: 1_000_000, slots_per_cycle: 10, slot_ns: 200_000, hyperperiod_cycles: 1, cycle_counter_wrap: 1, laxity: LaxityEncoding::Linear { unit_ns: 1 }, guard_ns: 0, fingerprint: 0 }, module: 0, tx: &[], rx: &[], calendar: &[], master_masks: &[] };
+    const _: () = assert!(check_tables(&EMPTY, 0, 0).is_ok());
+}

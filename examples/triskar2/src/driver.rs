@@ -1,0 +1,85 @@
+//! The engine with everything it drives, as one RTIC resource shared by the hardware
+//! tasks (slot timer, CAN RX0/TX/SCE, kick). All of them run at the same, highest
+//! priority, so they never preempt each other and RTIC grants them the resource
+//! without a lock; node tasks below only lock it briefly to read the clock.
+use rtcan_board_stm32f103::glue;
+use rtcan_board_stm32f103::hal::gpio::Floating;
+use rtcan_board_stm32f103::hal::pac::{Interrupt, NVIC};
+use rtcan_board_stm32f103::{BxCan, SlotTimer};
+use rtcan_core::engine::Engine;
+use rtcan_core::time::Nanos;
+use rtcan_pubsub::ModuleHost;
+
+/// Interrupt of the kick task (unused by the F103's peripherals in these images).
+pub const KICK_INTERRUPT: Interrupt = Interrupt::EXTI1;
+
+/// A topic queued a message for the engine: pend the kick task (called from any
+/// priority, outside the topic's critical section).
+pub fn kick() {
+    NVIC::pend(KICK_INTERRUPT);
+}
+
+/// Engine, CAN adapter, slot timer and the module's topics as the engine's host.
+pub struct Driver<const RX: usize, const ARENA: usize, const Q: usize> {
+    /// The protocol engine.
+    pub engine: Engine<'static, RX, ARENA, Q>,
+    /// bxCAN adapter.
+    pub can: BxCan<Floating>,
+    /// TIM2: local clock and slot alarm.
+    pub timer: SlotTimer,
+    /// The module's topics.
+    pub host: ModuleHost<'static>,
+}
+
+impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
+    /// Local time, ns (the clock of the engine and of received messages' stamps).
+    pub fn now(&self) -> Nanos {
+        self.timer.now()
+    }
+
+    /// First run of the engine after start-up: arms the slot alarm.
+    pub fn start(&mut self) {
+        glue::poll(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
+    }
+
+    /// TIM2: slot boundaries, window ends, bus-off check.
+    pub fn on_timer(&mut self) {
+        glue::on_timer(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        // A boundary frees queue room and may open a window: hand over what waits.
+        self.pump();
+    }
+
+    /// USB_LP_CAN_RX0: received frames (reassembly, delivery to local subscribers).
+    pub fn on_rx(&mut self) {
+        glue::on_rx(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        self.rearm();
+    }
+
+    /// USB_HP_CAN_TX: mailbox completions (the next frame is loaded from here).
+    pub fn on_tx(&mut self) {
+        glue::on_tx(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        self.pump();
+    }
+
+    /// CAN_SCE: error counters, bus-off.
+    pub fn on_sce(&mut self) {
+        glue::on_sce(&mut self.can, &mut self.engine);
+    }
+
+    /// Kick: SRT/NRT messages published by node tasks go to the engine.
+    pub fn on_kick(&mut self) {
+        self.pump();
+    }
+
+    fn pump(&mut self) {
+        let now = self.timer.now();
+        if self.host.pump(&mut self.engine, now, &mut self.can) > 0 {
+            self.rearm();
+        }
+    }
+
+    /// The engine's next wake-up may have moved (a submit, a sync frame): re-arm.
+    fn rearm(&mut self) {
+        glue::poll(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
+    }
+}
