@@ -366,7 +366,9 @@ fn search(
         // Utilisation f/p descending, then period ascending, then index.
         let ua = u64::from(ra.fragments) * u64::from(rb.period_slots);
         let ub = u64::from(rb.fragments) * u64::from(ra.period_slots);
-        ub.cmp(&ua).then(ra.period_slots.cmp(&rb.period_slots)).then(a.cmp(&b))
+        ub.cmp(&ua)
+            .then(ra.period_slots.cmp(&rb.period_slots))
+            .then(a.cmp(&b))
     });
 
     // Per depth: period, fragments, domain size, sync gcd, "same as previous depth".
@@ -593,10 +595,11 @@ pub fn suggest_periods(
 
 /// Builds the master's reservation mask of every cycle of the hyperperiod into `out`
 /// (bit k = slot k of that cycle; bit 0, the sync, always set) and returns the number
-/// of cycles. Also validates the placements: a collision, a sync hit or a phase not
-/// below its period is reported as `Infeasible` naming the requests involved.
-/// `TooMany { count: cycles }` if `out` is too short or `placements` shorter than
-/// `requests`; `HyperperiodTooLong` also when `slots_per_cycle` is not in 1..=64.
+/// of cycles. Also validates the placements: a collision or a sync hit is reported as
+/// `Infeasible` naming the requests involved (one index for a sync hit), a phase not
+/// below its period (or bad fragments) as `InvalidRequest`. `TooMany { count }` if
+/// `out` holds fewer than `count` cycles or `placements` is shorter than `requests`;
+/// `HyperperiodTooLong` also when `slots_per_cycle` is not in 1..=64.
 pub fn build_masks(
     slots_per_cycle: u32,
     requests: &[HrtRequest],

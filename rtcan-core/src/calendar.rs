@@ -78,12 +78,7 @@ pub const fn next_reserved(mask: u64, slot: u8, slots_per_cycle: u8) -> u8 {
 /// `mask` (bit k = slot k reserved), up to the end of the cycle (slot 0 of the next
 /// cycle is always the sync slot). 0 if `slot` itself is reserved.
 pub const fn free_run(mask: u64, slot: u8, slots_per_cycle: u8) -> u8 {
-    let end = next_reserved(mask, slot, slots_per_cycle);
-    if end > slot {
-        end - slot
-    } else {
-        0
-    }
+    next_reserved(mask, slot, slots_per_cycle).saturating_sub(slot)
 }
 
 /// The reservation mask the master broadcasts for absolute cycle `abs_cycle`: the

@@ -63,6 +63,9 @@ pub enum Event {
     SyncLost,
     /// A heartbeat from `module` carried another robot fingerprint.
     FingerprintMismatch { module: u8, fingerprint: u32 },
+    /// A cycle began (slot-0 boundary on the master and on a synced slave): drives
+    /// per-cycle supervision such as missing-heartbeat counting.
+    CycleStart,
     /// A heartbeat from `module` was received (state byte as sent).
     Heartbeat { module: u8, state: u8 },
 }

@@ -524,6 +524,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 return;
             }
         }
+        host.event(Event::CycleStart);
         if self.pos.heartbeat_in == 0 {
             self.pos.heartbeat_in = HEARTBEAT_CYCLES as u8;
             self.heartbeat_pending = true;

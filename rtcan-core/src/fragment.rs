@@ -106,14 +106,18 @@ pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -
         return 0;
     };
     let start = 8 * usize::from(fragment_count(payload.len()) - 1 - counter);
+    let end = start + usize::from(dlc);
+    // Payload part as one block copy (this runs in the slot handler on every load).
+    let from_payload = end.min(payload.len()).saturating_sub(start);
+    if let (Some(src), Some(dst)) = (payload.get(start..start + from_payload), out.get_mut(..from_payload)) {
+        dst.copy_from_slice(src);
+    }
+    // Past the payload come the CRC bytes (only multi-frame messages reach them).
     let crc = crc.to_le_bytes();
-    for (k, slot) in out.iter_mut().take(usize::from(dlc)).enumerate() {
-        let j = start + k;
-        // Past the payload come the CRC bytes (only multi-frame messages reach them).
-        *slot = match payload.get(j) {
-            Some(&b) => b,
-            None => crc.get(j - payload.len()).copied().unwrap_or(0),
-        };
+    for j in start + from_payload..end {
+        if let (Some(slot), Some(&b)) = (out.get_mut(j - start), crc.get(j - payload.len())) {
+            *slot = b;
+        }
     }
     dlc
 }

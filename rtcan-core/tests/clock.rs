@@ -159,7 +159,7 @@ fn missed_syncs_are_bridged_by_the_rate() {
     let heard = |c: u64| match c {
         0..100 => c % 3 != 1,
         100..355 => false,
-        _ => c % 2 == 0,
+        _ => c.is_multiple_of(2),
     };
     let clk = run(&bus(32_760), xtal, 0, 500, heard, |_| 0);
     assert_eq!(clk.last_sync_cycle(), Some(498));

@@ -78,6 +78,8 @@ impl SystemStatus {
         let master = self.config.master;
         self.with(|st| match event {
             Event::Synced => st.synced = true,
+            // Ages the master's heartbeat (same as `on_cycle`).
+            Event::CycleStart => st.master_age = st.master_age.saturating_add(1),
             Event::SyncLost => {
                 st.synced = false;
                 st.sync_losses = st.sync_losses.saturating_add(1);
@@ -104,7 +106,8 @@ impl SystemStatus {
         });
     }
 
-    /// Called once per bus cycle (by the glue or a periodic task): ages the master's heartbeat.
+    /// Ages the master's heartbeat by one cycle. The engine's `Event::CycleStart` does
+    /// this through `event`; call it directly only when driving the status by hand.
     pub fn on_cycle(&self) {
         self.with(|st| st.master_age = st.master_age.saturating_add(1));
     }

@@ -168,6 +168,8 @@ pub struct Bus<M: Module> {
     pub record_wire: bool,
     /// Counters.
     pub stats: BusStats,
+    offers: Vec<(u32, usize, usize)>,
+    irqs: Vec<(Nanos, Ev)>,
 }
 
 fn result_code(r: TxResult) -> u8 {
@@ -203,6 +205,8 @@ impl<M: Module> Bus<M> {
             wire: Vec::new(),
             record_wire: true,
             stats: BusStats::default(),
+            offers: Vec::new(),
+            irqs: Vec::new(),
         }
     }
 
@@ -383,19 +387,16 @@ impl<M: Module> Bus<M> {
         let State::Arbitrating { sof } = self.state else {
             return;
         };
-        let offers: Vec<(u32, usize, usize)> = self
-            .nodes
-            .iter()
-            .enumerate()
-            .filter_map(|(n, node)| {
-                node.can
-                    .best_pending()
-                    .map(|(mb, p)| (p.frame.id().raw(), n, mb))
-            })
-            .collect();
+        // Reused buffer: this runs once per frame and must not allocate.
+        let mut offers = std::mem::take(&mut self.offers);
+        offers.clear();
+        offers.extend(self.nodes.iter().enumerate().filter_map(|(n, node)| {
+            node.can.best_pending().map(|(mb, p)| (p.frame.id().raw(), n, mb))
+        }));
         let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
             // Everything was aborted during the SOF bit.
             self.state = State::Idle { from: self.now };
+            self.offers = offers;
             return;
         };
         if offers.len() > 1 {
@@ -423,6 +424,7 @@ impl<M: Module> Bus<M> {
                 );
             }
         }
+        self.offers = offers;
         let Some(node) = self.nodes.get_mut(win_node) else {
             return;
         };
@@ -476,7 +478,8 @@ impl<M: Module> Bus<M> {
                 ok,
             });
         }
-        let mut irqs = Vec::new();
+        let mut irqs = std::mem::take(&mut self.irqs);
+        irqs.clear();
         if let Some(node) = self.nodes.get_mut(tx) {
             node.can.on_wire = None;
             let lat = now + node.setup.irq_latency_ns;
@@ -541,9 +544,10 @@ impl<M: Module> Bus<M> {
         } else {
             self.stats.error_frames += 1;
         }
-        for (t, ev) in irqs {
+        for &(t, ev) in &irqs {
             self.push(t, ev);
         }
+        self.irqs = irqs;
         self.state = State::Idle { from: now + ifs };
         self.maybe_start_arbitration();
     }

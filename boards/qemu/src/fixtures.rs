@@ -289,6 +289,7 @@ impl<const TX: usize, const RX: usize> Host for TestHost<TX, RX> {
     fn event(&mut self, event: Event) {
         match event {
             Event::Synced => self.synced += 1,
+            Event::CycleStart => {}
             Event::SyncLost => self.sync_lost += 1,
             Event::Heartbeat { .. } => self.heartbeats += 1,
             Event::FingerprintMismatch { .. } => self.mismatches += 1,

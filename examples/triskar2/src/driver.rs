@@ -46,7 +46,9 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
     pub fn on_timer(&mut self) {
         glue::on_timer(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
         // A boundary frees queue room and may open a window: hand over what waits.
-        self.pump();
+        if self.pump() {
+            self.rearm();
+        }
     }
 
     /// USB_LP_CAN_RX0: received frames (reassembly, delivery to local subscribers).
@@ -58,7 +60,9 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
     /// USB_HP_CAN_TX: mailbox completions (the next frame is loaded from here).
     pub fn on_tx(&mut self) {
         glue::on_tx(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        // A completion frees queue room and may end a transfer early.
         self.pump();
+        self.rearm();
     }
 
     /// CAN_SCE: error counters, bus-off.
@@ -68,14 +72,15 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
 
     /// Kick: SRT/NRT messages published by node tasks go to the engine.
     pub fn on_kick(&mut self) {
-        self.pump();
-    }
-
-    fn pump(&mut self) {
-        let now = self.timer.now();
-        if self.host.pump(&mut self.engine, now, &mut self.can) > 0 {
+        if self.pump() {
             self.rearm();
         }
+    }
+
+    /// Hands queued SRT/NRT messages to the engine; true if any was submitted.
+    fn pump(&mut self) -> bool {
+        let now = self.timer.now();
+        self.host.pump(&mut self.engine, now, &mut self.can) > 0
     }
 
     /// The engine's next wake-up may have moved (a submit, a sync frame): re-arm.

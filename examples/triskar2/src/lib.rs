@@ -24,3 +24,10 @@ defmt::timestamp!("{=u32:ms}", {
     use rtic_monotonics::Monotonic;
     Mono::now().ticks()
 });
+
+/// Logs a failed `spawn` from `init` (cannot happen: each task is spawned once).
+pub fn spawned<E>(result: Result<(), E>, task: &str) {
+    if result.is_err() {
+        defmt::error!("task {} was already running", task);
+    }
+}

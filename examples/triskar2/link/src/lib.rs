@@ -3,12 +3,27 @@
 //! ```text
 //! 0xA5 0x5A  topic  len  payload[len]  f16_lo f16_hi
 //! ```
-//! `topic` is the robot.toml message ID's low byte, `len` ≤ [`MAX_PAYLOAD`], and the
+//! `topic` is a [`topic`] number, `len` ≤ [`MAX_PAYLOAD`], and the
 //! Fletcher-16 check covers `topic`, `len` and the payload. Two sync bytes plus the
 //! check let the decoder resynchronise after a lost byte without escaping (a UART link
 //! loses whole bytes, it does not flip runs of them). HAL-free and host-tested.
 #![cfg_attr(not(test), no_std)]
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::indexing_slicing))]
+
+/// Link topic numbers (fixed by this protocol, independent of the bus message IDs
+/// the planner assigns, so the host side does not change when robot.toml does).
+pub mod topic {
+    /// Host → robot: `Twist` velocity command (forwarded as robot.toml `teleop`).
+    pub const TELEOP: u8 = 1;
+    /// Robot → host: `Odometry`.
+    pub const ODOMETRY: u8 = 2;
+    /// Robot → host: `Proximity`.
+    pub const PROXIMITY: u8 = 3;
+    /// Robot → host: `Battery`.
+    pub const BATTERY: u8 = 4;
+    /// Robot → host: `LogLine`.
+    pub const LOG: u8 = 5;
+}
 
 /// First sync byte.
 pub const SYNC0: u8 = 0xA5;

@@ -10,6 +10,7 @@ use rtcan_core::tables::{BusConfig, CalEntry, RxTopic, TxTopic};
 use rtcan_core::time::Nanos;
 
 pub mod types;
+pub use types::*;
 
 pub mod gateway;
 pub mod motor1;
@@ -33,8 +34,9 @@ pub const BUS: BusConfig = BusConfig {
 
 /// Module index of the bus master (`gateway`).
 pub const MASTER: u8 = 0;
-/// Master heartbeats that may be missed before the safe state is required.
-pub const MAX_MISSED_CYCLES: u16 = 3;
+/// Cycles without a master heartbeat before the safe state is required: three
+/// heartbeat periods.
+pub const MAX_MISSED_CYCLES: u16 = (3 * rtcan_core::engine::HEARTBEAT_CYCLES) as u16;
 
 const fn tx(id: u16, class: Class, size: u16, deadline_ns: Nanos) -> TxTopic {
     TxTopic {

@@ -1,48 +1,121 @@
-//! Module `motor2`: DC motor 2 and the odometry (nodes `odometry`, `motor_ctrl2`).
+//! Module `motor2`: DC motor 2 and the odometry.
 #![allow(clippy::unreadable_literal)]
-use super::types::*;
 use super::{cal, rx, tx, BUS, MASTER, MAX_MISSED_CYCLES};
 use rtcan_core::id::Class;
 use rtcan_core::tables::{CalEntry, NodeTables, RxTopic, TxTopic};
-use rtcan_pubsub::{pool_blocks, ModuleHost, Node, Remote, RxPort, SafetyConfig, SystemStatus, Topic, TxPort};
+use rtcan_core::time::Nanos;
+use rtcan_pubsub::{ModuleHost, Node, RxPort, SafetyConfig, SystemStatus, TxPort};
 
 // ---- tables (robot.toml plan, fingerprint 0x734e658e) ----
-const TX: [TxTopic; 1] = [tx(0x0140, Class::Hrt, 24, 0)];
-const RX_TOPICS: [RxTopic; 3] = [rx(0x0144, 8, 0), rx(0x0145, 8, 8), rx(0x0147, 12, 16)];
-const CALENDAR: [CalEntry; 8] = [cal(5, 0, 3), cal(6, 0, 2), cal(7, 0, 1), cal(8, 0, 0), cal(125, 0, 3), cal(126, 0, 2), cal(127, 0, 1), cal(128, 0, 0)];
-const MASTER_MASKS: [u64; 0] = [];
+pub const TX: [TxTopic; 1] = [tx(0x0140, Class::Hrt, 24, 0)];
+pub const RX: [RxTopic; 3] = [rx(0x0144, 8, 0), rx(0x0145, 8, 8), rx(0x0147, 12, 16)];
+pub const CALENDAR: [CalEntry; 8] = [cal(5, 0, 3), cal(6, 0, 2), cal(7, 0, 1), cal(8, 0, 0), cal(125, 0, 3), cal(126, 0, 2), cal(127, 0, 1), cal(128, 0, 0)];
+pub const MASTER_MASKS: [u64; 0] = [];
 /// Engine tables of module `motor2` (index 2).
-pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 2, tx: &TX, rx: &RX_TOPICS, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
+pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 2, tx: &TX, rx: &RX, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
 /// Engine receive topics.
-pub const RX: usize = 3;
+pub pub const RX: usize = 3;
 /// Reassembly arena bytes.
-pub const ARENA: usize = 30;
+pub const ARENA_BYTES: usize = 30;
 /// Acceptance filters (id, mask), one Mask32 bank each.
 pub const FILTERS: &[(u32, u32)] = &[(0x00000000, 0x1fff8000), (0x00008000, 0x007fe000), (0x0000a200, 0x007fff00), (0x0000a380, 0x007fff80)];
 
-// ---- topics: pools = subscribers × queue + subscribers + engine share + 1 loan ----
-/// `encoder1` (received): subscriber 0 = odometry (queue 2).
-pub static ENCODER1: Topic<Encoder, { pool_blocks(1, 2, 0, 1) }, 1, 2> = Topic::new(Remote::None, None);
-/// `encoder2` (local only: publisher and subscriber both on this module).
-pub static ENCODER2: Topic<Encoder, { pool_blocks(1, 2, 0, 1) }, 1, 2> = Topic::new(Remote::None, None);
-/// `encoder3` (received): subscriber 0 = odometry (queue 2).
-pub static ENCODER3: Topic<Encoder, { pool_blocks(1, 2, 0, 1) }, 1, 2> = Topic::new(Remote::None, None);
-/// `wheel_setpoints` (received): subscriber 0 = motor_ctrl2.
-pub static WHEEL_SETPOINTS: Topic<WheelSpeeds, { pool_blocks(1, 1, 0, 1) }, 1, 1> =
-    Topic::new(Remote::None, None);
-/// `odometry` (HRT, 4 fragments, to the gateway).
-pub static ODOMETRY: Topic<Odometry, { pool_blocks(0, 1, 2, 1) }, 0, 1> = Topic::new(Remote::Hrt, None);
-/// Engine SRT/NRT queue (this module sends HRT only).
-pub const QUEUE: usize = 1;
+/// Engine SRT/NRT queue capacity.
+pub const QUEUE_CAPACITY: usize = 1;
+/// This module's engine type.
+pub type Engine<'t> = rtcan_core::engine::Engine<'t, RX_COUNT, ARENA_BYTES, QUEUE_CAPACITY>;
+/// The engine, started at local time `now`.
+pub fn engine(now: Nanos) -> Engine<'static> {
+    Engine::new(TABLES, now)
+}
 
-static TX_PORTS: [&dyn TxPort; 1] = [&ODOMETRY];
-static RX_PORTS: [&dyn RxPort; 3] = [&ENCODER1, &ENCODER3, &WHEEL_SETPOINTS];
+/// Topic statics: pools = subscribers × queue + subscribers + engine share + 1 loan.
+pub mod topics {
+    use super::super::types::*;
+    use rtcan_pubsub::{pool_blocks, Remote, Topic};
+    /// Pool blocks of `encoder1`.
+    pub const ENCODER1_POOL: usize = pool_blocks(1, 2, 0, 1);
+    /// Topic `encoder1`: 1 local subscriber(s), queues of 2, received from the bus.
+    pub type Encoder1Topic = Topic<Encoder, ENCODER1_POOL, 1, 2>;
+    /// Topic `encoder1`.
+    pub static ENCODER1: Encoder1Topic = Topic::new(Remote::None, None);
+    /// Pool blocks of `encoder2`.
+    pub const ENCODER2_POOL: usize = pool_blocks(1, 2, 0, 1);
+    /// Topic `encoder2`: 1 local subscriber(s), queues of 2, local only.
+    pub type Encoder2Topic = Topic<Encoder, ENCODER2_POOL, 1, 2>;
+    /// Topic `encoder2`.
+    pub static ENCODER2: Encoder2Topic = Topic::new(Remote::None, None);
+    /// Pool blocks of `encoder3`.
+    pub const ENCODER3_POOL: usize = pool_blocks(1, 2, 0, 1);
+    /// Topic `encoder3`: 1 local subscriber(s), queues of 2, received from the bus.
+    pub type Encoder3Topic = Topic<Encoder, ENCODER3_POOL, 1, 2>;
+    /// Topic `encoder3`.
+    pub static ENCODER3: Encoder3Topic = Topic::new(Remote::None, None);
+    /// Pool blocks of `wheel_setpoints`.
+    pub const WHEEL_SETPOINTS_POOL: usize = pool_blocks(1, 1, 0, 1);
+    /// Topic `wheel_setpoints`: 1 local subscriber(s), queues of 1, received from the bus.
+    pub type WheelSetpointsTopic = Topic<WheelSpeeds, WHEEL_SETPOINTS_POOL, 1, 1>;
+    /// Topic `wheel_setpoints`.
+    pub static WHEEL_SETPOINTS: WheelSetpointsTopic = Topic::new(Remote::None, None);
+    /// Pool blocks of `odometry`.
+    pub const ODOMETRY_POOL: usize = pool_blocks(0, 1, 2, 1);
+    /// Topic `odometry`: 0 local subscriber(s), queues of 1, sent on the bus.
+    pub type OdometryTopic = Topic<Odometry, ODOMETRY_POOL, 0, 1>;
+    /// Topic `odometry`.
+    pub static ODOMETRY: OdometryTopic = Topic::new(Remote::Hrt, None);
+}
 
-/// Node `odometry` (priority 1).
-pub static ODOMETRY_NODE: Node = Node::new("odometry");
-/// Node `motor_ctrl2` (priority 3).
-pub static MOTOR_CTRL2: Node = Node::new("motor_ctrl2");
-static NODES: [&Node; 2] = [&ODOMETRY_NODE, &MOTOR_CTRL2];
+/// Nodes: lifecycle and typed handles for exactly the topics each declares.
+pub mod nodes {
+    /// Node `odometry` (priority 1).
+    pub mod odometry {
+        use super::super::super::types::*;
+        use super::super::topics::*;
+        use rtcan_pubsub::{Node, Publisher, Subscriber};
+        /// Lifecycle (its state goes into the module's heartbeat).
+        pub static NODE: Node = Node::new("odometry");
+        /// Task priority from robot.toml (1 = lowest).
+        pub const PRIORITY: u8 = 1;
+        /// Publisher of topic `odometry`.
+        pub fn odometry_pub() -> Publisher<'static, Odometry, ODOMETRY_POOL, 0, 1> {
+            ODOMETRY.publisher()
+        }
+        /// Subscription to topic `encoder1`.
+        pub fn encoder1_sub() -> Subscriber<'static, Encoder, ENCODER1_POOL, 1, 2> {
+            ENCODER1.subscriber::<0>()
+        }
+        /// Subscription to topic `encoder2`.
+        pub fn encoder2_sub() -> Subscriber<'static, Encoder, ENCODER2_POOL, 1, 2> {
+            ENCODER2.subscriber::<0>()
+        }
+        /// Subscription to topic `encoder3`.
+        pub fn encoder3_sub() -> Subscriber<'static, Encoder, ENCODER3_POOL, 1, 2> {
+            ENCODER3.subscriber::<0>()
+        }
+    }
+    /// Node `motor_ctrl2` (priority 3).
+    pub mod motor_ctrl2 {
+        use super::super::super::types::*;
+        use super::super::topics::*;
+        use rtcan_pubsub::{Node, Publisher, Subscriber};
+        /// Lifecycle (its state goes into the module's heartbeat).
+        pub static NODE: Node = Node::new("motor_ctrl2");
+        /// Task priority from robot.toml (1 = lowest).
+        pub const PRIORITY: u8 = 3;
+        /// Publisher of topic `encoder2`.
+        pub fn encoder2_pub() -> Publisher<'static, Encoder, ENCODER2_POOL, 1, 2> {
+            ENCODER2.publisher()
+        }
+        /// Subscription to topic `wheel_setpoints`.
+        pub fn wheel_setpoints_sub() -> Subscriber<'static, WheelSpeeds, WHEEL_SETPOINTS_POOL, 1, 1> {
+            WHEEL_SETPOINTS.subscriber::<0>()
+        }
+    }
+}
+
+static TX_PORTS: [&dyn TxPort; 1] = [&topics::ODOMETRY];
+static RX_PORTS: [&dyn RxPort; 3] = [&topics::ENCODER1, &topics::ENCODER3, &topics::WHEEL_SETPOINTS];
+static NODES: [&Node; 2] = [&nodes::odometry::NODE, &nodes::motor_ctrl2::NODE];
 
 /// This module's system-status view (fed by the engine's events).
 pub static STATUS: SystemStatus = SystemStatus::new(SafetyConfig {

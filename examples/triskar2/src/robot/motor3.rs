@@ -1,40 +1,77 @@
-//! Module `motor3`: DC motor 3 (node `motor_ctrl3`).
+//! Module `motor3`: DC motor 3.
 #![allow(clippy::unreadable_literal)]
-use super::types::*;
 use super::{cal, rx, tx, BUS, MASTER, MAX_MISSED_CYCLES};
 use rtcan_core::id::Class;
 use rtcan_core::tables::{CalEntry, NodeTables, RxTopic, TxTopic};
-use rtcan_pubsub::{pool_blocks, ModuleHost, Node, Remote, RxPort, SafetyConfig, SystemStatus, Topic, TxPort};
+use rtcan_core::time::Nanos;
+use rtcan_pubsub::{ModuleHost, Node, RxPort, SafetyConfig, SystemStatus, TxPort};
 
 // ---- tables (robot.toml plan, fingerprint 0x734e658e) ----
-const TX: [TxTopic; 1] = [tx(0x0145, Class::Hrt, 8, 0)];
-const RX_TOPICS: [RxTopic; 1] = [rx(0x0147, 12, 0)];
-const CALENDAR: [CalEntry; 8] = [cal(2, 0, 0), cal(32, 0, 0), cal(62, 0, 0), cal(92, 0, 0), cal(122, 0, 0), cal(152, 0, 0), cal(182, 0, 0), cal(212, 0, 0)];
-const MASTER_MASKS: [u64; 0] = [];
+pub const TX: [TxTopic; 1] = [tx(0x0145, Class::Hrt, 8, 0)];
+pub const RX: [RxTopic; 1] = [rx(0x0147, 12, 0)];
+pub const CALENDAR: [CalEntry; 8] = [cal(2, 0, 0), cal(32, 0, 0), cal(62, 0, 0), cal(92, 0, 0), cal(122, 0, 0), cal(152, 0, 0), cal(182, 0, 0), cal(212, 0, 0)];
+pub const MASTER_MASKS: [u64; 0] = [];
 /// Engine tables of module `motor3` (index 3).
-pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 3, tx: &TX, rx: &RX_TOPICS, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
+pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 3, tx: &TX, rx: &RX, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
 /// Engine receive topics.
-pub const RX: usize = 1;
+pub pub const RX: usize = 1;
 /// Reassembly arena bytes.
-pub const ARENA: usize = 14;
+pub const ARENA_BYTES: usize = 14;
 /// Acceptance filters (id, mask), one Mask32 bank each.
 pub const FILTERS: &[(u32, u32)] = &[(0x00000000, 0x1fff8000), (0x00008000, 0x007fe000), (0x0000a380, 0x007fff80)];
 
-// ---- topics: pools = subscribers × queue + subscribers + engine share + 1 loan ----
-/// `wheel_setpoints` (received): subscriber 0 = motor_ctrl3.
-pub static WHEEL_SETPOINTS: Topic<WheelSpeeds, { pool_blocks(1, 1, 0, 1) }, 1, 1> =
-    Topic::new(Remote::None, None);
-/// `encoder3` (HRT, to odometry on motor2).
-pub static ENCODER3: Topic<Encoder, { pool_blocks(0, 1, 2, 1) }, 0, 1> = Topic::new(Remote::Hrt, None);
-/// Engine SRT/NRT queue (this module sends HRT only).
-pub const QUEUE: usize = 1;
+/// Engine SRT/NRT queue capacity.
+pub const QUEUE_CAPACITY: usize = 1;
+/// This module's engine type.
+pub type Engine<'t> = rtcan_core::engine::Engine<'t, RX_COUNT, ARENA_BYTES, QUEUE_CAPACITY>;
+/// The engine, started at local time `now`.
+pub fn engine(now: Nanos) -> Engine<'static> {
+    Engine::new(TABLES, now)
+}
 
-static TX_PORTS: [&dyn TxPort; 1] = [&ENCODER3];
-static RX_PORTS: [&dyn RxPort; 1] = [&WHEEL_SETPOINTS];
+/// Topic statics: pools = subscribers × queue + subscribers + engine share + 1 loan.
+pub mod topics {
+    use super::super::types::*;
+    use rtcan_pubsub::{pool_blocks, Remote, Topic};
+    /// Pool blocks of `wheel_setpoints`.
+    pub const WHEEL_SETPOINTS_POOL: usize = pool_blocks(1, 1, 0, 1);
+    /// Topic `wheel_setpoints`: 1 local subscriber(s), queues of 1, received from the bus.
+    pub type WheelSetpointsTopic = Topic<WheelSpeeds, WHEEL_SETPOINTS_POOL, 1, 1>;
+    /// Topic `wheel_setpoints`.
+    pub static WHEEL_SETPOINTS: WheelSetpointsTopic = Topic::new(Remote::None, None);
+    /// Pool blocks of `encoder3`.
+    pub const ENCODER3_POOL: usize = pool_blocks(0, 1, 2, 1);
+    /// Topic `encoder3`: 0 local subscriber(s), queues of 1, sent on the bus.
+    pub type Encoder3Topic = Topic<Encoder, ENCODER3_POOL, 0, 1>;
+    /// Topic `encoder3`.
+    pub static ENCODER3: Encoder3Topic = Topic::new(Remote::Hrt, None);
+}
 
-/// Node `motor_ctrl3` (priority 3).
-pub static MOTOR_CTRL3: Node = Node::new("motor_ctrl3");
-static NODES: [&Node; 1] = [&MOTOR_CTRL3];
+/// Nodes: lifecycle and typed handles for exactly the topics each declares.
+pub mod nodes {
+    /// Node `motor_ctrl3` (priority 3).
+    pub mod motor_ctrl3 {
+        use super::super::super::types::*;
+        use super::super::topics::*;
+        use rtcan_pubsub::{Node, Publisher, Subscriber};
+        /// Lifecycle (its state goes into the module's heartbeat).
+        pub static NODE: Node = Node::new("motor_ctrl3");
+        /// Task priority from robot.toml (1 = lowest).
+        pub const PRIORITY: u8 = 3;
+        /// Publisher of topic `encoder3`.
+        pub fn encoder3_pub() -> Publisher<'static, Encoder, ENCODER3_POOL, 0, 1> {
+            ENCODER3.publisher()
+        }
+        /// Subscription to topic `wheel_setpoints`.
+        pub fn wheel_setpoints_sub() -> Subscriber<'static, WheelSpeeds, WHEEL_SETPOINTS_POOL, 1, 1> {
+            WHEEL_SETPOINTS.subscriber::<0>()
+        }
+    }
+}
+
+static TX_PORTS: [&dyn TxPort; 1] = [&topics::ENCODER3];
+static RX_PORTS: [&dyn RxPort; 1] = [&topics::WHEEL_SETPOINTS];
+static NODES: [&Node; 1] = [&nodes::motor_ctrl3::NODE];
 
 /// This module's system-status view (fed by the engine's events).
 pub static STATUS: SystemStatus = SystemStatus::new(SafetyConfig {

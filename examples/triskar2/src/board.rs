@@ -1,0 +1,109 @@
+//! Start-up common to every module: clock tree (HSE 8 MHz → SYSCLK 72 MHz, PCLK1
+//! 36 MHz, the constants of `rtcan_board_stm32f103`), bxCAN on PA11/PA12 at the robot's
+//! bit rate with the module's acceptance filters, the slot timer on TIM2.
+use rtcan_board_stm32f103::hal::afio::{self, AfioExt};
+use rtcan_board_stm32f103::hal::can::CanExt;
+use rtcan_board_stm32f103::hal::gpio::{gpioa, gpiob, Cr, GpioExt};
+use rtcan_board_stm32f103::hal::pac;
+use rtcan_board_stm32f103::hal::prelude::*;
+use rtcan_board_stm32f103::hal::rcc::{self, Rcc};
+use rtcan_board_stm32f103::{can_btr, BxCan, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ};
+use rtcan_board_stm32f103::hal::gpio::Floating;
+
+use crate::robot::BUS;
+use crate::SYSCLK_HZ;
+
+/// CAN bit timing register for robot.toml's bit rate (a compile error if PCLK1 cannot
+/// produce it exactly).
+pub const BTR: u32 = can_btr!(PCLK1_HZ, BUS.bitrate);
+
+/// Pins left for the modules, with their port configuration registers.
+pub struct Pins {
+    /// ADC1 channels 0..3: IR rangers (proximity), battery voltage/current (psu).
+    pub adc: (gpioa::PA0, gpioa::PA1, gpioa::PA2, gpioa::PA3),
+    /// TIM3 CH1/CH2: motor encoder A/B (input, floating).
+    pub encoder: (gpioa::PA6, gpioa::PA7),
+    /// USART1 TX/RX: gateway host link.
+    pub usart1: (gpioa::PA9, gpioa::PA10),
+    /// TIM4 CH1/CH2: H-bridge PWM forward/reverse.
+    pub pwm: (gpiob::PB6, gpiob::PB7),
+    /// Port A low configuration register (PA0..PA7).
+    pub a_crl: Cr<'A', false>,
+    /// Port A high configuration register (PA8..PA15).
+    pub a_crh: Cr<'A', true>,
+    /// Port B low configuration register (PB0..PB7).
+    pub b_crl: Cr<'B', false>,
+}
+
+/// What the module-specific code gets after the common start-up.
+pub struct Board {
+    /// CAN adapter, enabled, filters programmed.
+    pub can: BxCan<Floating>,
+    /// TIM2 slot timer, running.
+    pub timer: SlotTimer,
+    /// Clocks and bus enables.
+    pub rcc: Rcc,
+    /// The pins the module images use (PA11/PA12 are CAN's).
+    pub pins: Pins,
+    /// Alternate-function remapping.
+    pub afio: afio::Parts,
+    /// Peripherals left for the module: ADC1 (rangers, battery).
+    pub adc1: pac::ADC1,
+    /// TIM3 (motor encoder).
+    pub tim3: pac::TIM3,
+    /// TIM4 (motor PWM).
+    pub tim4: pac::TIM4,
+    /// USART1 (gateway host link).
+    pub usart1: pac::USART1,
+}
+
+/// Brings the board up; `filters` = the module's `filter_set!(FILTERS)`.
+pub fn init(dp: pac::Peripherals, filters: FilterSet) -> Board {
+    let mut flash = dp.FLASH.constrain();
+    let mut rcc = dp.RCC.freeze(
+        rcc::Config::hse(8.MHz())
+            .sysclk(SYSCLK_HZ.Hz())
+            .pclk1(PCLK1_HZ.Hz()),
+        &mut flash.acr,
+    );
+    // The CAN bit timing and the slot timer's prescaler are constants computed for
+    // this clock tree: refuse to run the bus at a wrong rate.
+    if rcc.clocks.pclk1().raw() != PCLK1_HZ || rcc.clocks.pclk1_tim().raw() != TIM2_CLOCK_HZ {
+        defmt::panic!(
+            "clock tree: PCLK1 {} Hz, TIM2 {} Hz",
+            rcc.clocks.pclk1().raw(),
+            rcc.clocks.pclk1_tim().raw()
+        );
+    }
+    let mut gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    // PB3/PB4/PA15 stay JTAG: SWD (what probe-rs uses) does not need them released.
+    let afio = dp.AFIO.constrain(&mut rcc);
+    let tx = gpioa.pa12.into_alternate_push_pull(&mut gpioa.crh);
+    let can = dp.CAN.can::<Floating>(dp.USB, (tx, gpioa.pa11), &mut rcc);
+    let can = BxCan::new(can, BTR, BUS.bitrate, filters);
+    let timer = match SlotTimer::new(dp.TIM2, &mut rcc, TIM2_CLOCK_HZ) {
+        Ok(t) => t,
+        // Unreachable with the clock tree checked above (72 MHz = 9 × 8 MHz).
+        Err(_) => defmt::panic!("TIM2 clock is not a multiple of the 8 MHz tick"),
+    };
+    Board {
+        can,
+        timer,
+        rcc,
+        pins: Pins {
+            adc: (gpioa.pa0, gpioa.pa1, gpioa.pa2, gpioa.pa3),
+            encoder: (gpioa.pa6, gpioa.pa7),
+            usart1: (gpioa.pa9, gpioa.pa10),
+            pwm: (gpiob.pb6, gpiob.pb7),
+            a_crl: gpioa.crl,
+            a_crh: gpioa.crh,
+            b_crl: gpiob.crl,
+        },
+        afio,
+        adc1: dp.ADC1,
+        tim3: dp.TIM3,
+        tim4: dp.TIM4,
+        usart1: dp.USART1,
+    }
+}
