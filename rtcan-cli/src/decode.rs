@@ -1,8 +1,11 @@
 //! `rtcan decode <log> --robot robot.toml`: candump log → topic-level messages.
 use rtcan_sim::decode::{decode, plan_catalog, render, scenario_catalog, Catalog, Decoded};
+use std::io::Write as _;
+
 use rtcan_sim::{candump, paper};
 
-const USAGE: &str = "usage: rtcan decode <candump.log> (--robot robot.toml | --scenario rtcan-paper)";
+const USAGE: &str =
+    "usage: rtcan decode <candump.log> (--robot robot.toml | --scenario rtcan-paper)";
 
 /// Runs `rtcan decode`; returns the exit code.
 pub fn run(args: &[String]) -> i32 {
@@ -55,14 +58,22 @@ pub fn run(args: &[String]) -> i32 {
     };
     let out = decode(&entries, &cat);
     let (mut msgs, mut unknown) = (0, 0);
+    let mut stdout = std::io::stdout().lock();
     for d in &out {
         match d {
             Decoded::Message { .. } => msgs += 1,
             Decoded::Unattributed { .. } => unknown += 1,
             _ => {}
         }
-        println!("{}", render(d, &cat));
+        // A closed pipe (`| head`) ends the listing quietly.
+        if writeln!(stdout, "{}", render(d, &cat)).is_err() {
+            return 0;
+        }
     }
-    println!("-- {} frames: {msgs} messages, {unknown} frames not attributed", entries.len());
+    let _ = writeln!(
+        stdout,
+        "-- {} frames: {msgs} messages, {unknown} frames not attributed",
+        entries.len()
+    );
     0
 }

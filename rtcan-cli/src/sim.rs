@@ -21,13 +21,22 @@ struct Args {
 }
 
 fn parse(args: &[String]) -> Result<Args, String> {
-    let mut a = Args { robot: None, scenario: None, cfg: SimConfig::default(), json: false, out: None, sweep: false };
+    let mut a = Args {
+        robot: None,
+        scenario: None,
+        cfg: SimConfig::default(),
+        json: false,
+        out: None,
+        sweep: false,
+    };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
         match arg.as_str() {
             "--scenario" => a.scenario = Some(value("--scenario")?),
-            "--seconds" => a.cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?,
+            "--seconds" => {
+                a.cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?
+            }
             "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
             "--load" => a.cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
             "--ber" => a.cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
@@ -86,16 +95,26 @@ fn write(dir: &Path, name: &str, text: &str) -> Result<(), String> {
 fn progress(done: usize, total: usize) {
     let width = 30;
     let filled = done * width / total.max(1);
-    eprint!("\r[{}{}] {done}/{total}", "#".repeat(filled), " ".repeat(width - filled));
+    eprint!(
+        "\r[{}{}] {done}/{total}",
+        "#".repeat(filled),
+        " ".repeat(width - filled)
+    );
     if done == total {
         eprintln!();
     }
 }
 
 fn speed_line(sim_s: f64, wall: f64, cpu: Option<f64>) -> String {
-    let mut s = format!("speed: {sim_s:.1} s simulated in {wall:.3} s wall = {:.0}x real time", sim_s / wall.max(1e-9));
+    let mut s = format!(
+        "speed: {sim_s:.1} s simulated in {wall:.3} s wall = {:.0}x real time",
+        sim_s / wall.max(1e-9)
+    );
     if let Some(cpu) = cpu {
-        s.push_str(&format!("; {cpu:.3} s on CPU = {:.0}x real time per core", sim_s / cpu.max(1e-9)));
+        s.push_str(&format!(
+            "; {cpu:.3} s on CPU = {:.0}x real time per core",
+            sim_s / cpu.max(1e-9)
+        ));
     }
     s
 }
@@ -110,8 +129,16 @@ fn thread_cpu_s() -> Option<f64> {
 
 fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
     write(dir, "can0.log", &candump::log(&run.wire, "can0"))?;
-    write(dir, &format!("hrt-jitter-{}.svg", run.policy), &svg::hrt_jitter(run))?;
-    write(dir, &format!("srt-latency-{}.svg", run.policy), &svg::srt_latency(run))?;
+    write(
+        dir,
+        &format!("hrt-jitter-{}.svg", run.policy),
+        &svg::hrt_jitter(run),
+    )?;
+    write(
+        dir,
+        &format!("srt-latency-{}.svg", run.policy),
+        &svg::srt_latency(run),
+    )?;
     if let Some(bus) = sc.bus() {
         let rows: Vec<(String, Vec<(u32, String)>)> = sc
             .tables
@@ -123,14 +150,26 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
                     .iter()
                     .filter(|e| e.slot < u32::from(bus.slots_per_cycle))
                     .map(|e| {
-                        let label = sc.topics.iter().find(|i| i.node == n && i.tx == e.tx).map_or("?", |i| i.label.as_str());
+                        let label = sc
+                            .topics
+                            .iter()
+                            .find(|i| i.node == n && i.tx == e.tx)
+                            .map_or("?", |i| i.label.as_str());
                         (e.slot, label.chars().take(4).collect())
                     })
                     .collect();
                 (format!("node {n}"), cells)
             })
             .collect();
-        write(dir, "calendar.svg", &svg::calendar(bus.slots_per_cycle, sc.masks().first().copied().unwrap_or(1), &rows))?;
+        write(
+            dir,
+            "calendar.svg",
+            &svg::calendar(
+                bus.slots_per_cycle,
+                sc.masks().first().copied().unwrap_or(1),
+                &rows,
+            ),
+        )?;
     }
     Ok(())
 }
@@ -139,12 +178,24 @@ fn run_paper(a: &Args) -> Result<(), String> {
     let t0 = Instant::now();
     let cmp: Comparison = paper_comparison(&a.cfg);
     let wall = t0.elapsed().as_secs_f64();
-    let sweep = if a.sweep { paper_sweep(&a.cfg, progress) } else { Vec::new() };
+    let sweep = if a.sweep {
+        paper_sweep(&a.cfg, progress)
+    } else {
+        Vec::new()
+    };
     // Speed of one engine run alone (the figure the README quotes).
     let t1 = Instant::now();
     let c1 = thread_cpu_s();
     let sc = paper::scenario(paper::our_laxity(), a.cfg.load);
-    let _ = run_engine(&sc, &SimConfig { record_wire: false, ..a.cfg.clone() }, PolicyKind::Ours, Policy::OURS);
+    let _ = run_engine(
+        &sc,
+        &SimConfig {
+            record_wire: false,
+            ..a.cfg.clone()
+        },
+        PolicyKind::Ours,
+        Policy::OURS,
+    );
     let one = t1.elapsed().as_secs_f64();
     let cpu = thread_cpu_s().zip(c1).map(|(b, a)| b - a);
     if a.json {
@@ -158,7 +209,10 @@ fn run_paper(a: &Args) -> Result<(), String> {
             a.cfg.seconds / cpu.unwrap_or(one).max(1e-9)
         );
     } else {
-        println!("rtcan-paper: {} s simulated, seed {}\n", a.cfg.seconds, a.cfg.seed);
+        println!(
+            "rtcan-paper: {} s simulated, seed {}\n",
+            a.cfg.seconds, a.cfg.seed
+        );
         print!("{}", report::comparison_text(&cmp));
         for r in &cmp.runs {
             println!();
@@ -173,14 +227,34 @@ fn run_paper(a: &Args) -> Result<(), String> {
         println!("(all four policies: {wall:.3} s wall)");
     }
     if let Some(dir) = &a.out {
-        if let Some(ours) = cmp.runs.iter().find(|r| r.policy == PolicyKind::Ours.name()) {
+        if let Some(ours) = cmp
+            .runs
+            .iter()
+            .find(|r| r.policy == PolicyKind::Ours.name())
+        {
             outputs(dir, &sc, ours)?;
         }
-        for r in cmp.runs.iter().filter(|r| r.policy != PolicyKind::Ours.name()) {
-            write(dir, &format!("srt-latency-{}.svg", r.policy), &svg::srt_latency(r))?;
+        for r in cmp
+            .runs
+            .iter()
+            .filter(|r| r.policy != PolicyKind::Ours.name())
+        {
+            write(
+                dir,
+                &format!("srt-latency-{}.svg", r.policy),
+                &svg::srt_latency(r),
+            )?;
         }
-        if let Some(r) = cmp.runs.iter().find(|r| r.policy == PolicyKind::FixedPriority.name()) {
-            write(dir, &format!("hrt-jitter-{}.svg", r.policy), &svg::hrt_jitter(r))?;
+        if let Some(r) = cmp
+            .runs
+            .iter()
+            .find(|r| r.policy == PolicyKind::FixedPriority.name())
+        {
+            write(
+                dir,
+                &format!("hrt-jitter-{}.svg", r.policy),
+                &svg::hrt_jitter(r),
+            )?;
         }
         if !sweep.is_empty() {
             let (miss, lat) = svg::sweep(&sweep);
@@ -225,7 +299,10 @@ fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> R
             a.cfg.seconds / cpu.unwrap_or(wall).max(1e-9)
         );
     } else {
-        println!("{}: {} s simulated, seed {}\n", plan.file, a.cfg.seconds, a.cfg.seed);
+        println!(
+            "{}: {} s simulated, seed {}\n",
+            plan.file, a.cfg.seconds, a.cfg.seed
+        );
         print!("{}", report::text(&run));
         println!("{}", speed_line(a.cfg.seconds, wall, cpu));
     }

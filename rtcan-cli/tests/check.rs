@@ -7,7 +7,11 @@ fn root() -> PathBuf {
 }
 
 fn rtcan(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_rtcan")).args(args).current_dir(root()).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap();
     (
         out.status.code().unwrap(),
         String::from_utf8(out.stdout).unwrap(),
@@ -37,14 +41,21 @@ fn paper_calendar_has_40_of_60_slots() {
 fn not_admissible_exits_1() {
     let (code, out, err) = rtcan(&["check", "robots/broken/inadmissible-hrt.toml"]);
     assert_eq!(code, 1);
-    assert!(err.starts_with("error[inadmissible-hrt]: topic `speed` has period 3 slots"), "{err}");
+    assert!(
+        err.starts_with("error[inadmissible-hrt]: topic `speed` has period 3 slots"),
+        "{err}"
+    );
     assert!(err.contains("--> robots/broken/inadmissible-hrt.toml:35:8"));
     assert_eq!(out, "robots/broken/inadmissible-hrt.toml: not admissible\n");
 }
 
 #[test]
 fn invalid_input_exits_2() {
-    for f in ["robots/broken/unknown-key.toml", "robots/broken/toml-syntax.toml", "robots/does-not-exist.toml"] {
+    for f in [
+        "robots/broken/unknown-key.toml",
+        "robots/broken/toml-syntax.toml",
+        "robots/does-not-exist.toml",
+    ] {
         let (code, out, err) = rtcan(&["check", f]);
         assert_eq!(code, 2, "{f}");
         assert!(out.is_empty(), "{f}");
@@ -60,12 +71,19 @@ fn invalid_input_exits_2() {
 fn json_output_and_exit_codes() {
     let (code, out, _) = rtcan(&["check", "robot.toml", "--json"]);
     assert_eq!(code, 0);
-    for needle in ["\"admissible\": true", "\"slots_per_cycle\": 60", "\"slot_ns\": 166666", "\"phase_slot\": 3"] {
+    for needle in [
+        "\"admissible\": true",
+        "\"slots_per_cycle\": 60",
+        "\"slot_ns\": 166666",
+        "\"phase_slot\": 3",
+    ] {
         assert!(out.contains(needle), "{needle}");
     }
     let (code, out, _) = rtcan(&["check", "--json", "robots/broken/hrt-over-capacity.toml"]);
     assert_eq!(code, 1);
-    assert!(out.contains("\"admissible\": false") && out.contains("\"code\": \"hrt-over-capacity\""));
+    assert!(
+        out.contains("\"admissible\": false") && out.contains("\"code\": \"hrt-over-capacity\"")
+    );
     let (code, out, _) = rtcan(&["check", "--json", "robots/broken/no-master.toml"]);
     assert_eq!(code, 2);
     assert!(out.contains("\"status\": \"invalid\""));

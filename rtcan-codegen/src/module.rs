@@ -103,27 +103,36 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
     };
 
     // ---- topic statics ----
+    // Pool sizes and engine indices live in their own submodules (`pool`, `tx`, `rx`),
+    // named like the topic: no topic name can clash with another item.
+    let pool_consts = locals.iter().map(|l| {
+        let c = names::upper(&l.topic.name);
+        let (s, q, r) = (lit::usize(l.subs.len()), lit::int(l.queue), lit::usize(l.remote_blocks()));
+        let too_big = format!(
+            "topic `{}` on module `{}` needs more than {MAX_POOL} pool blocks: shorten its subscriber queues",
+            l.topic.name, m.name
+        );
+        let max = lit::usize(MAX_POOL);
+        quote! {
+            pub const #c: usize = ::rtcan::pubsub::pool_blocks(#s, #q, #r, 1);
+            const _: () = ::core::assert!(#c <= #max, #too_big);
+        }
+    });
     let topic_items = locals.iter().map(|l| {
         let c = names::upper(&l.topic.name);
-        let pool = names::ident(&format!("{}_POOL", l.topic.name.to_ascii_uppercase()));
         let alias = names::camel_suffixed(&l.topic.name, "Topic");
         let ty = plan
             .types
             .get(l.topic.ty)
             .map(|t| names::ident(&t.name))
             .unwrap_or_else(|| names::ident("u8"));
-        let (s, q, r) = (lit::usize(l.subs.len()), lit::int(l.queue), lit::usize(l.remote_blocks()));
+        let (s, q) = (lit::usize(l.subs.len()), lit::int(l.queue));
         let remote = match l.remote {
             None => quote!(None),
             Some(Class::Hrt) => quote!(Hrt),
             Some(Class::Srt) => quote!(Srt),
             Some(Class::Nrt) => quote!(Nrt),
         };
-        let too_big = format!(
-            "topic `{}` on module `{}` needs more than {MAX_POOL} pool blocks: shorten its subscriber queues",
-            l.topic.name, m.name
-        );
-        let max = lit::usize(MAX_POOL);
         let doc = format!(
             "Topic `{}` on this module: {} local subscriber(s), queues of {}, {}.",
             l.topic.name,
@@ -136,28 +145,23 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             }
         );
         quote! {
-            /// Pool blocks of the topic below (`rtcan::pubsub::pool_blocks`).
-            pub const #pool: usize = ::rtcan::pubsub::pool_blocks(#s, #q, #r, 1);
-            const _: () = ::core::assert!(#pool <= #max, #too_big);
             #[doc = #doc]
-            pub type #alias = ::rtcan::pubsub::Topic<super::super::#ty, #pool, #s, #q>;
+            pub type #alias = ::rtcan::pubsub::Topic<super::super::#ty, { pool::#c }, #s, #q>;
             #[doc = #doc]
             pub static #c: #alias = ::rtcan::pubsub::Topic::new(::rtcan::pubsub::Remote::#remote, #kick);
         }
     });
     let tx_consts = m.tx.iter().enumerate().filter_map(|(k, ti)| {
         let t = plan.topics.get(*ti)?;
-        let c = names::ident(&format!("TX_{}", t.name.to_ascii_uppercase()));
+        let c = names::upper(&t.name);
         let k = lit::usize(k);
-        Some(quote! { /// Engine transmit index (`NodeTables::tx`).
-            pub const #c: u8 = #k; })
+        Some(quote! { pub const #c: u8 = #k; })
     });
     let rx_consts = m.rx.iter().enumerate().filter_map(|(k, ti)| {
         let t = plan.topics.get(*ti)?;
-        let c = names::ident(&format!("RX_{}", t.name.to_ascii_uppercase()));
+        let c = names::upper(&t.name);
         let k = lit::usize(k);
-        Some(quote! { /// Engine receive index (`NodeTables::rx`).
-            pub const #c: u8 = #k; })
+        Some(quote! { pub const #c: u8 = #k; })
     });
     let tx_ports: Vec<_> = m
         .tx
@@ -181,14 +185,13 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
         let handles = locals.iter().flat_map(|l| {
             let t = l.topic;
             let c = names::upper(&t.name);
-            let pool = names::ident(&format!("{}_POOL", t.name.to_ascii_uppercase()));
             let ty = plan
                 .types
                 .get(t.ty)
                 .map(|x| names::ident(&x.name))
                 .unwrap_or_else(|| names::ident("u8"));
             let (s, q) = (lit::usize(l.subs.len()), lit::int(l.queue));
-            let generics = quote! { 'static, super::super::super::#ty, { super::super::topics::#pool }, #s, #q };
+            let generics = quote! { 'static, super::super::super::#ty, { super::super::topics::pool::#c }, #s, #q };
             let mut out = Vec::new();
             if t.publisher == *ni {
                 let f = names::ident(&format!("{}_pub", t.name));
@@ -316,8 +319,18 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             /// This module's topics: every topic its nodes publish or subscribe.
             pub mod topics {
                 #(#topic_items)*
-                #(#tx_consts)*
-                #(#rx_consts)*
+                /// Pool blocks per topic (`rtcan::pubsub::pool_blocks`).
+                pub mod pool {
+                    #(#pool_consts)*
+                }
+                /// Engine transmit index of each topic sent on the bus (`NodeTables::tx`).
+                pub mod tx {
+                    #(#tx_consts)*
+                }
+                /// Engine receive index of each topic received from the bus (`NodeTables::rx`).
+                pub mod rx {
+                    #(#rx_consts)*
+                }
             }
 
             /// This module's nodes.

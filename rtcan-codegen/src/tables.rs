@@ -60,14 +60,16 @@ pub fn topic_infos(plan: &Plan) -> TokenStream {
         }
     });
     let all: Vec<_> = plan.topics.iter().map(|t| names::upper(&t.name)).collect();
-    let n = lit::usize(all.len());
     quote! {
         /// Every topic's planned constants (message ID, class, period, phase, deadline,
         /// fragments, size).
         pub mod topics {
             #(#items)*
-            /// All topics, in robot.toml order.
-            pub const ALL: [::rtcan::TopicInfo; #n] = [#(#all),*];
+            /// All topics, in robot.toml order (a function: no topic constant can be
+            /// named in lowercase).
+            pub fn all() -> &'static [::rtcan::TopicInfo] {
+                &[#(#all),*]
+            }
         }
     }
 }

@@ -204,7 +204,13 @@ fn div_round(a: i128, b: i128) -> i128 {
     if b <= 0 {
         return a;
     }
-    (2 * a + b).div_euclid(2 * b)
+    let (n, d) = (2 * a + b, 2 * b);
+    // 64-bit fast path (every case but gaps of seconds): a 128-bit division is a long
+    // software routine on Cortex-M3, and this runs in the RX interrupt of each sync.
+    match (i64::try_from(n), i64::try_from(d)) {
+        (Ok(n), Ok(d)) => i128::from(n.div_euclid(d)),
+        _ => n.div_euclid(d),
+    }
 }
 
 fn clamp_nanos(v: i128) -> Nanos {

@@ -417,8 +417,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
-        let bus = self.tables.bus;
-        let spc = bus.slots_per_cycle;
+        let spc = self.tables.bus.slots_per_cycle;
         if self.pos.next_slot >= spc {
             self.next_cycle();
         }
@@ -450,13 +449,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let run = free_run(self.cycle_mask, slot, spc);
-        self.window_end = self.pos.boundary(slot + run).saturating_sub(bus.guard_ns);
+        self.window_end = self.pos.boundary(slot + run).saturating_sub(self.tables.bus.guard_ns);
         self.refill(now, can, host);
     }
 
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
     fn next_cycle(&mut self) {
-        let bus = self.tables.bus;
+        // Borrow, not copy: `BusConfig` is a dozen words and this runs every cycle.
+        let bus = &self.tables.bus;
         let p = &mut self.pos;
         p.start_local = p.boundary(bus.slots_per_cycle);
         p.start_bus += bus.cycle_ns();
@@ -487,7 +487,6 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
-        let bus = self.tables.bus;
         if self.master {
             let idx = self.pos.cycle_in_hyper as usize;
             self.cycle_mask = self
@@ -505,7 +504,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         cycle,
                         mask: self.cycle_mask,
                     },
-                    bus.slots_per_cycle,
+                    self.tables.bus.slots_per_cycle,
                 );
                 self.load_any(Loaded::Sync, &frame, can);
             }
@@ -602,7 +601,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// Fills free mailboxes with window frames that can finish before the window ends.
     fn refill(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) {
-        if self.window_end <= now {
+        if self.window_end <= now || (self.queue.is_empty() && !self.heartbeat_pending) {
             return;
         }
         let now_bus = self.bus_time(now);

@@ -50,9 +50,19 @@ fn fmt_period(model: &Model, slots: u32) -> String {
 /// "admissible periods for `x`: ..." from `suggest_periods`, or a fallback hint.
 fn suggestion(model: &Model, hrt: &[HrtTopic], index: usize) -> String {
     let requests: Vec<HrtRequest> = hrt.iter().map(|h| h.request).collect();
+    let name = hrt.get(index).map_or("?", |h| topic_name(model, h.topic));
+    // A period longer than the hyperperiod bound can never be admitted, and searching
+    // 1..=2*period candidates for it would take seconds.
+    if hrt
+        .get(index)
+        .is_some_and(|h| u64::from(h.request.period_slots) > MAX_HYPERPERIOD_SLOTS)
+    {
+        return format!(
+            "an HRT period must be at most {MAX_HYPERPERIOD_SLOTS} slots; make `{name}` SRT or NRT with a `rate` instead"
+        );
+    }
     let mut out = [0u32; 4];
     let n = admission::suggest_periods(u32::from(model.bus.slots), &requests, index, &mut out);
-    let name = hrt.get(index).map_or("?", |h| topic_name(model, h.topic));
     let list: Vec<String> = out.iter().take(n).map(|p| fmt_period(model, *p)).collect();
     if list.is_empty() {
         format!("no period near the requested one makes `{name}` admissible: move other HRT topics or lengthen their periods")

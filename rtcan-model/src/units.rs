@@ -33,7 +33,7 @@ pub fn duration_ns(text: &str) -> Result<u64, String> {
         _ => return Err(bad()),
     };
     let ns = (v * scale).round();
-    if ns < 1.0 || ns > 1e12 {
+    if !(1.0..=1e12).contains(&ns) {
         return Err(format!(
             "duration `{text}` is out of range (1 ns to 1000 s)"
         ));

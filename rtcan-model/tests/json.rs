@@ -1,10 +1,14 @@
 //! Shape of `rtcan check --json` (documented in docs/ROBOT_TOML.md).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+
 use rtcan_model::{analyze, report};
 use serde_json::Value;
 use std::path::PathBuf;
 
 fn load(rel: &str) -> Value {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(rel);
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(rel);
     let src = std::fs::read_to_string(path).unwrap();
     let text = report::json_text(&analyze(rel, &src));
     serde_json::from_str(&text).unwrap()
@@ -31,8 +35,11 @@ fn admissible_json_has_placements_that_never_collide() {
             for k in ["topic", "module", "period_slots", "phase_slot", "fragments"] {
                 assert!(keys.contains(&k), "{rel}: {k}");
             }
-            let (p, ph, f) =
-                (h["period_slots"].as_u64().unwrap(), h["phase_slot"].as_u64().unwrap(), h["fragments"].as_u64().unwrap());
+            let (p, ph, f) = (
+                h["period_slots"].as_u64().unwrap(),
+                h["phase_slot"].as_u64().unwrap(),
+                h["fragments"].as_u64().unwrap(),
+            );
             let mut k = 0;
             while ph + k * p < hyper {
                 for j in 0..f {
@@ -48,7 +55,11 @@ fn admissible_json_has_placements_that_never_collide() {
         for (c, m) in masks.iter().enumerate() {
             let m = u64::from_str_radix(m.as_str().unwrap().trim_start_matches("0x"), 16).unwrap();
             for s in 0..slots {
-                assert_eq!(m >> s & 1 == 1, owner[c * slots as usize + s as usize].is_some(), "{rel}: cycle {c} slot {s}");
+                assert_eq!(
+                    m >> s & 1 == 1,
+                    owner[c * slots as usize + s as usize].is_some(),
+                    "{rel}: cycle {c} slot {s}"
+                );
             }
         }
         assert_eq!(v["diagnostics"], Value::Array(vec![]));
@@ -65,8 +76,14 @@ fn failing_json_reports_status_and_diagnostics() {
     let d = &v["diagnostics"][0];
     assert_eq!(d["code"], "inadmissible-hrt");
     assert_eq!(d["category"], "schedule");
-    assert_eq!((d["line"].as_u64(), d["column"].as_u64()), (Some(35), Some(8)));
-    assert!(d["help"][0].as_str().unwrap().starts_with("admissible periods for `speed`"));
+    assert_eq!(
+        (d["line"].as_u64(), d["column"].as_u64()),
+        (Some(35), Some(8))
+    );
+    assert!(d["help"][0]
+        .as_str()
+        .unwrap()
+        .starts_with("admissible periods for `speed`"));
 
     let v = load("robots/broken/unknown-node.toml");
     assert_eq!(v["status"], "invalid");

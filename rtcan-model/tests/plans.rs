@@ -1,4 +1,6 @@
 //! The two reference robots: Triskar2 (robot.toml) and the RTCAN paper benchmark.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+
 use rtcan_core::tables::CalEntry;
 use rtcan_core::{Class, MsgId};
 use rtcan_model::filters::{passes, FilterBank};
@@ -18,7 +20,10 @@ fn paper() -> Plan {
 }
 
 fn mask(id: u16, size: u32) -> FilterBank {
-    FilterBank::Mask { id: u32::from(id) << 7, mask: (!(size - 1) & 0xFFFF) << 7 }
+    FilterBank::Mask {
+        id: u32::from(id) << 7,
+        mask: (!(size - 1) & 0xFFFF) << 7,
+    }
 }
 
 #[test]
@@ -41,17 +46,31 @@ fn paper_reproduces_fig3() {
         ("h_c3", 60, 12),
     ] {
         let t = p.topic(name).unwrap();
-        assert_eq!((t.period_slots, t.phase_slot, t.fragments), (Some(period), Some(phase), 1), "{name}");
+        assert_eq!(
+            (t.period_slots, t.phase_slot, t.fragments),
+            (Some(period), Some(phase), 1),
+            "{name}"
+        );
     }
     let fig3 = "111111111111111100011100011100011111111100011100011100011100";
-    let expected: u64 = fig3.chars().enumerate().map(|(i, c)| u64::from(c == '1') << i).sum();
+    let expected: u64 = fig3
+        .chars()
+        .enumerate()
+        .map(|(i, c)| u64::from(c == '1') << i)
+        .sum();
     assert_eq!(p.master_masks, vec![expected]);
     assert_eq!(expected.count_ones(), 40);
     assert_eq!(p.reserved_slots(), 39);
     // 45 SRT topics, deadlines from Table 2, 16 and 20 bytes need 3 frames each.
-    assert_eq!(p.topics.iter().filter(|t| t.class == Class::Srt).count(), 45);
+    assert_eq!(
+        p.topics.iter().filter(|t| t.class == Class::Srt).count(),
+        45
+    );
     let sb = p.topic("s_b2_3").unwrap();
-    assert_eq!((sb.size, sb.fragments, sb.deadline_ns), (16, 3, Some(10_000_000)));
+    assert_eq!(
+        (sb.size, sb.fragments, sb.deadline_ns),
+        (16, 3, Some(10_000_000))
+    );
     assert_eq!(p.topic("s_c3_5").unwrap().fragments, 3);
     // One receiver set (the capture module): 54 topics in one 64-ID block, one mask.
     assert_eq!(p.topic("h_a1").unwrap().msg_id, MsgId(0x140));
@@ -66,10 +85,17 @@ fn paper_reproduces_fig3() {
 #[test]
 fn paper_check_text_shows_the_calendar() {
     let text = rtcan_model::report::text(&paper());
-    assert!(text.contains("  node1    SA..B..A..C..A.....A.....A.....A..B..A.....A.....A.....A....\n"), "{text}");
-    assert!(text.contains("  node3    ...A..B..A..C..A.....A.....A.....A..B..A.....A.....A.....A..\n"));
+    assert!(
+        text.contains("  node1    SA..B..A..C..A.....A.....A.....A..B..A.....A.....A.....A....\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("  node3    ...A..B..A..C..A.....A.....A.....A..B..A.....A.....A.....A..\n")
+    );
     assert!(text.contains("  mask     111111111111111100011100011100011111111100011100011100011100   40/60 reserved\n"));
-    assert!(text.contains("h_a1       node1   0x0140  1000 Hz (1 ms)  1000.004 Hz (999.996 us)  6 slots   1"));
+    assert!(text.contains(
+        "h_a1       node1   0x0140  1000 Hz (1 ms)  1000.004 Hz (999.996 us)  6 slots   1"
+    ));
 }
 
 #[test]
@@ -95,7 +121,11 @@ fn triskar2_plan() {
         assert_eq!(t.msg_id, MsgId(id), "{name}");
         assert!(t.on_bus, "{name}");
         if let Some((period, phase, frags)) = hrt {
-            assert_eq!((t.period_slots, t.phase_slot, t.fragments), (Some(period), Some(phase), frags), "{name}");
+            assert_eq!(
+                (t.period_slots, t.phase_slot, t.fragments),
+                (Some(period), Some(phase), frags),
+                "{name}"
+            );
         }
     }
     // encoder2 is only read by odometry on the same module: never on the bus.
@@ -103,10 +133,16 @@ fn triskar2_plan() {
     assert!(!e2.on_bus);
     assert_eq!(e2.phase_slot, None);
     // 1000 Hz-style discretisation: 200 Hz -> 30 slots of 166.666 us = 4.99998 ms.
-    assert_eq!(p.topic("encoder1").unwrap().actual_period_ns(&p.bus), Some(4_999_980));
+    assert_eq!(
+        p.topic("encoder1").unwrap().actual_period_ns(&p.bus),
+        Some(4_999_980)
+    );
     // Reserved: per 240-slot hyperperiod 8+8 (encoders) + 8 (setpoints: 4 x 2) + 8 (odometry 2 x 4) + 1.
     assert_eq!(p.reserved_slots(), 33);
-    assert_eq!(p.master_masks, vec![0x1_8000_03ff, 0x1_8000_001f, 0x1_8000_01ff, 0x1_8000_001f]);
+    assert_eq!(
+        p.master_masks,
+        vec![0x1_8000_03ff, 0x1_8000_001f, 0x1_8000_01ff, 0x1_8000_001f]
+    );
     assert_eq!(p.module("gateway").unwrap().banks[2].filter, mask(0x140, 4));
     let m2 = p.module("motor2").unwrap();
     assert_eq!(m2.banks.len(), 4);
@@ -124,18 +160,46 @@ fn triskar2_module_tables() {
     assert_eq!(t.bus.fingerprint, p.fingerprint);
     assert_eq!(t.bus.slots_per_cycle, 60);
     assert_eq!(t.bus.hyperperiod_cycles, 4);
-    assert_eq!(t.tx.iter().map(|x| x.msg_id.0).collect::<Vec<_>>(), vec![0x144, 0x147]);
-    assert_eq!(t.rx.iter().map(|x| (x.msg_id.0, x.size, x.arena_offset)).collect::<Vec<_>>(), vec![(0x146, 12, 0)]);
+    assert_eq!(
+        t.tx.iter().map(|x| x.msg_id.0).collect::<Vec<_>>(),
+        vec![0x144, 0x147]
+    );
+    assert_eq!(
+        t.rx.iter()
+            .map(|x| (x.msg_id.0, x.size, x.arena_offset))
+            .collect::<Vec<_>>(),
+        vec![(0x146, 12, 0)]
+    );
     assert!(t.master_masks.is_empty());
     let first: Vec<CalEntry> = t.calendar.iter().take(5).copied().collect();
     assert_eq!(
         first,
         vec![
-            CalEntry { slot: 1, tx: 0, fragment: 0 },
-            CalEntry { slot: 3, tx: 1, fragment: 1 },
-            CalEntry { slot: 4, tx: 1, fragment: 0 },
-            CalEntry { slot: 31, tx: 0, fragment: 0 },
-            CalEntry { slot: 61, tx: 0, fragment: 0 },
+            CalEntry {
+                slot: 1,
+                tx: 0,
+                fragment: 0
+            },
+            CalEntry {
+                slot: 3,
+                tx: 1,
+                fragment: 1
+            },
+            CalEntry {
+                slot: 4,
+                tx: 1,
+                fragment: 0
+            },
+            CalEntry {
+                slot: 31,
+                tx: 0,
+                fragment: 0
+            },
+            CalEntry {
+                slot: 61,
+                tx: 0,
+                fragment: 0
+            },
         ]
     );
     assert_eq!(t.calendar.len(), 8 + 8);
@@ -162,7 +226,13 @@ fn filters_are_exact() {
                 for lax in laxities {
                     for frag in 0..u32::from(t.fragments) {
                         let raw = (lax << 23) | (u32::from(t.msg_id.0) << 7) | frag;
-                        assert_eq!(pass(raw), wanted, "{}: {} lax {lax} frag {frag}", m.name, t.name);
+                        assert_eq!(
+                            pass(raw),
+                            wanted,
+                            "{}: {} lax {lax} frag {frag}",
+                            m.name,
+                            t.name
+                        );
                     }
                 }
             }
@@ -174,20 +244,34 @@ fn filters_are_exact() {
 fn fingerprint_is_stable_and_sensitive() {
     let src = std::fs::read_to_string(root().join("robot.toml")).unwrap();
     let a = analyze("robot.toml", &src).plan.unwrap().fingerprint;
-    assert_eq!(a, analyze("other-name.toml", &src).plan.unwrap().fingerprint);
+    assert_eq!(
+        a,
+        analyze("other-name.toml", &src).plan.unwrap().fingerprint
+    );
     // Reordering topic sections changes nothing on the wire, so not the fingerprint.
     let (head, topics) = src.split_at(src.find("[topics.teleop]").unwrap());
     let mut sections: Vec<&str> = topics.split("\n[topics.").collect();
     sections.reverse();
     let reordered = format!(
         "{head}{}",
-        sections.iter().map(|s| if s.starts_with('[') { s.to_string() } else { format!("[topics.{s}") }).collect::<Vec<_>>().join("\n")
+        sections
+            .iter()
+            .map(|s| if s.starts_with('[') {
+                s.to_string()
+            } else {
+                format!("[topics.{s}")
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
     );
     let b = analyze("robot.toml", &reordered);
     assert!(b.diagnostics.is_empty(), "{}", b.diagnostics.render());
     assert_eq!(b.plan.unwrap().fingerprint, a);
     // A different rate changes it.
-    let changed = src.replace("rate = \"50Hz\"\nsubscribers = [\"ros_bridge\"]", "rate = \"25Hz\"\nsubscribers = [\"ros_bridge\"]");
+    let changed = src.replace(
+        "rate = \"50Hz\"\nsubscribers = [\"ros_bridge\"]",
+        "rate = \"25Hz\"\nsubscribers = [\"ros_bridge\"]",
+    );
     assert_ne!(changed, src);
     assert_ne!(analyze("robot.toml", &changed).plan.unwrap().fingerprint, a);
 }

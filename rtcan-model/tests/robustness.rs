@@ -1,11 +1,14 @@
 //! Malformed input never panics: byte-level mutations (proptest), every line removed in
 //! turn, and every value replaced by hostile ones.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+
 use proptest::prelude::*;
 use rtcan_model::{analyze, Status};
 use std::path::PathBuf;
 
 fn triskar2() -> String {
-    std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robot.toml")).unwrap()
+    std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robot.toml"))
+        .unwrap()
 }
 
 /// Analyses and renders (rendering touches every span).
@@ -35,9 +38,26 @@ fn every_line_removed() {
 fn every_value_replaced_by_hostile_values() {
     let src = triskar2();
     let hostile = [
-        "0", "-1", "99999999999999999", "\"\"", "[]", "{}", "1e308", "nan", "true", "\"0Hz\"", "\"1ns\"",
-        "\"1000s\"", "\"999999Hz\"", "\"µs\"", "\"[u8; 99999]\"", "1979-05-27", "[\"x\", 1]", "{ node = 1 }",
-        "\"ü\"", "\"1.5kHz\"",
+        "0",
+        "-1",
+        "99999999999999999",
+        "\"\"",
+        "[]",
+        "{}",
+        "1e308",
+        "nan",
+        "true",
+        "\"0Hz\"",
+        "\"1ns\"",
+        "\"1000s\"",
+        "\"999999Hz\"",
+        "\"µs\"",
+        "\"[u8; 99999]\"",
+        "1979-05-27",
+        "[\"x\", 1]",
+        "{ node = 1 }",
+        "\"ü\"",
+        "\"1.5kHz\"",
     ];
     let lines: Vec<&str> = src.lines().collect();
     let mut statuses = [0usize; 3];

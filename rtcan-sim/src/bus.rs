@@ -127,7 +127,9 @@ enum Ev {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
     /// Free from the given time on (the intermission of the last frame ends there).
-    Idle { from: Nanos },
+    Idle {
+        from: Nanos,
+    },
     Arbitrating {
         sof: Nanos,
     },
@@ -391,7 +393,9 @@ impl<M: Module> Bus<M> {
         let mut offers = std::mem::take(&mut self.offers);
         offers.clear();
         offers.extend(self.nodes.iter().enumerate().filter_map(|(n, node)| {
-            node.can.best_pending().map(|(mb, p)| (p.frame.id().raw(), n, mb))
+            node.can
+                .best_pending()
+                .map(|(mb, p)| (p.frame.id().raw(), n, mb))
         }));
         let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
             // Everything was aborted during the SOF bit.

@@ -32,7 +32,9 @@ impl NodeClock {
         // simulated time at realistic drifts.
         if let (Ok(gi), Ok(off)) = (i64::try_from(g), i64::try_from(self.offset_ns)) {
             if let Some(p) = gi.checked_mul(self.drift_ppb) {
-                let l = gi.saturating_add(off).saturating_add(p.div_euclid(1_000_000_000));
+                let l = gi
+                    .saturating_add(off)
+                    .saturating_add(p.div_euclid(1_000_000_000));
                 return l.max(0) as u64;
             }
         }

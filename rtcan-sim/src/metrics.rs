@@ -223,7 +223,11 @@ pub fn compute(
     {
         let s = sofs.get(ti).map_or(&[][..], Vec::as_slice);
         let nominal = t.period_ns.max(1);
-        let intervals: Vec<i64> = s.windows(2).map(|p| (p[1] - p[0]) as i64).collect();
+        let intervals: Vec<i64> = s
+            .iter()
+            .zip(s.iter().skip(1))
+            .map(|(a, b)| (b - a) as i64)
+            .collect();
         let mut st = HrtStats {
             name: format!("{}@n{}", t.label, t.node),
             count: s.len() as u64,

@@ -204,6 +204,22 @@ pub fn generators(load: f64) -> Vec<Gen> {
     g
 }
 
+/// The whole scenario at SRT load `load` with the given laxity encoding.
+pub fn scenario(laxity: LaxityEncoding, load: f64) -> crate::run::Scenario {
+    let tables = tables(laxity);
+    let topics = crate::run::topic_infos(
+        &tables,
+        |_, t| topic_class(t).to_string(),
+        |_, t| HRT.get(t).map_or(0, |h| u64::from(h.1)),
+    );
+    crate::run::Scenario {
+        gens: (0..NODES).map(|_| generators(load)).collect(),
+        tables,
+        topics,
+        master: 0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -234,21 +250,5 @@ mod tests {
         assert_eq!(topic_class(7), "S_A");
         assert_eq!(topic_class(8), "S_B");
         assert_eq!(topic_class(17), "S_C");
-    }
-}
-
-/// The whole scenario at SRT load `load` with the given laxity encoding.
-pub fn scenario(laxity: LaxityEncoding, load: f64) -> crate::run::Scenario {
-    let tables = tables(laxity);
-    let topics = crate::run::topic_infos(
-        &tables,
-        |_, t| topic_class(t).to_string(),
-        |_, t| HRT.get(t).map_or(0, |h| u64::from(h.1)),
-    );
-    crate::run::Scenario {
-        gens: (0..NODES).map(|_| generators(load)).collect(),
-        tables,
-        topics,
-        master: 0,
     }
 }

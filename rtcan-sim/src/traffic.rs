@@ -153,7 +153,11 @@ impl TrafficHost {
                 }
             })
             .collect();
-        let next_global = gens.iter().map(|g: &GenState| g.next_global).min().unwrap_or(Nanos::MAX);
+        let next_global = gens
+            .iter()
+            .map(|g: &GenState| g.next_global)
+            .min()
+            .unwrap_or(Nanos::MAX);
         TrafficHost {
             node,
             clock,
@@ -194,7 +198,12 @@ impl TrafficHost {
     }
 
     fn update_next(&mut self) {
-        self.next_global = self.gens.iter().map(|g| g.next_global).min().unwrap_or(Nanos::MAX);
+        self.next_global = self
+            .gens
+            .iter()
+            .map(|g| g.next_global)
+            .min()
+            .unwrap_or(Nanos::MAX);
     }
 
     /// Next event due at local time `now`, as (topic, token, global event time).

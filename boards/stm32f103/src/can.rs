@@ -75,6 +75,12 @@ pub struct BxCan<PULL> {
     stats: CanStats,
 }
 
+// SAFETY: `regs` points at the CAN registers this value owns through `_can` (moved in,
+// never handed out); it is only dereferenced through `&mut self` or `&self` of this
+// value, so moving the adapter to another context (an RTIC resource) moves the only
+// access path with it, exactly like moving the PAC's `CAN` token, which is `Send`.
+unsafe impl<PULL: Send> Send for BxCan<PULL> {}
+
 impl<PULL> BxCan<PULL>
 where
     Can<pac::CAN, PULL>: bxcan::FilterOwner,

@@ -66,7 +66,7 @@ pub fn on_tx<P, H: Host, const RX: usize, const A: usize, const Q: usize>(
 }
 
 /// CAN status-change interrupt (CAN_SCE): error counters, bus-off entry and recovery.
-pub fn on_sce<P, H: Host, const RX: usize, const A: usize, const Q: usize>(
+pub fn on_sce<P, const RX: usize, const A: usize, const Q: usize>(
     can: &mut BxCan<P>,
     engine: &mut Engine<'_, RX, A, Q>,
 ) {

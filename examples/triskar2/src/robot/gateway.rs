@@ -1,5 +1,6 @@
 //! Module `gateway`: host link and bus master.
 #![allow(clippy::unreadable_literal)]
+#[allow(unused_imports)] // not every module has a calendar or receive topics
 use super::{cal, rx, tx, BUS, MASTER, MAX_MISSED_CYCLES};
 use rtcan_core::id::Class;
 use rtcan_core::tables::{CalEntry, NodeTables, RxTopic, TxTopic};
@@ -14,7 +15,7 @@ pub const MASTER_MASKS: [u64; 4] = [0x1800003ff, 0x18000001f, 0x1800001ff, 0x180
 /// Engine tables of module `gateway` (index 0).
 pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 0, tx: &TX, rx: &RX, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
 /// Engine receive topics.
-pub pub const RX: usize = 4;
+pub const RX_COUNT: usize = 4;
 /// Reassembly arena bytes.
 pub const ARENA_BYTES: usize = 73;
 /// Acceptance filters (id, mask), one Mask32 bank each.
@@ -71,6 +72,7 @@ pub mod nodes {
     pub mod ros_bridge {
         use super::super::super::types::*;
         use super::super::topics::*;
+        #[allow(unused_imports)] // not every node both publishes and subscribes
         use rtcan_pubsub::{Node, Publisher, Subscriber};
         /// Lifecycle (its state goes into the module's heartbeat).
         pub static NODE: Node = Node::new("ros_bridge");

@@ -1,5 +1,6 @@
 //! Module `motor1`: DC motor 1 and the inverse kinematics.
 #![allow(clippy::unreadable_literal)]
+#[allow(unused_imports)] // not every module has a calendar or receive topics
 use super::{cal, rx, tx, BUS, MASTER, MAX_MISSED_CYCLES};
 use rtcan_core::id::Class;
 use rtcan_core::tables::{CalEntry, NodeTables, RxTopic, TxTopic};
@@ -14,7 +15,7 @@ pub const MASTER_MASKS: [u64; 0] = [];
 /// Engine tables of module `motor1` (index 1).
 pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 1, tx: &TX, rx: &RX, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
 /// Engine receive topics.
-pub pub const RX: usize = 1;
+pub const RX_COUNT: usize = 1;
 /// Reassembly arena bytes.
 pub const ARENA_BYTES: usize = 14;
 /// Acceptance filters (id, mask), one Mask32 bank each.
@@ -59,6 +60,7 @@ pub mod nodes {
     pub mod kinematics {
         use super::super::super::types::*;
         use super::super::topics::*;
+        #[allow(unused_imports)] // not every node both publishes and subscribes
         use rtcan_pubsub::{Node, Publisher, Subscriber};
         /// Lifecycle (its state goes into the module's heartbeat).
         pub static NODE: Node = Node::new("kinematics");
@@ -77,6 +79,7 @@ pub mod nodes {
     pub mod motor_ctrl1 {
         use super::super::super::types::*;
         use super::super::topics::*;
+        #[allow(unused_imports)] // not every node both publishes and subscribes
         use rtcan_pubsub::{Node, Publisher, Subscriber};
         /// Lifecycle (its state goes into the module's heartbeat).
         pub static NODE: Node = Node::new("motor_ctrl1");

@@ -1,5 +1,6 @@
 //! Module `motor2`: DC motor 2 and the odometry.
 #![allow(clippy::unreadable_literal)]
+#[allow(unused_imports)] // not every module has a calendar or receive topics
 use super::{cal, rx, tx, BUS, MASTER, MAX_MISSED_CYCLES};
 use rtcan_core::id::Class;
 use rtcan_core::tables::{CalEntry, NodeTables, RxTopic, TxTopic};
@@ -14,7 +15,7 @@ pub const MASTER_MASKS: [u64; 0] = [];
 /// Engine tables of module `motor2` (index 2).
 pub const TABLES: NodeTables<'static> = NodeTables { bus: BUS, module: 2, tx: &TX, rx: &RX, calendar: &CALENDAR, master_masks: &MASTER_MASKS };
 /// Engine receive topics.
-pub pub const RX: usize = 3;
+pub const RX_COUNT: usize = 3;
 /// Reassembly arena bytes.
 pub const ARENA_BYTES: usize = 30;
 /// Acceptance filters (id, mask), one Mask32 bank each.
@@ -71,6 +72,7 @@ pub mod nodes {
     pub mod odometry {
         use super::super::super::types::*;
         use super::super::topics::*;
+        #[allow(unused_imports)] // not every node both publishes and subscribes
         use rtcan_pubsub::{Node, Publisher, Subscriber};
         /// Lifecycle (its state goes into the module's heartbeat).
         pub static NODE: Node = Node::new("odometry");
@@ -97,6 +99,7 @@ pub mod nodes {
     pub mod motor_ctrl2 {
         use super::super::super::types::*;
         use super::super::topics::*;
+        #[allow(unused_imports)] // not every node both publishes and subscribes
         use rtcan_pubsub::{Node, Publisher, Subscriber};
         /// Lifecycle (its state goes into the module's heartbeat).
         pub static NODE: Node = Node::new("motor_ctrl2");
