@@ -107,10 +107,14 @@ pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -
     };
     let start = 8 * usize::from(fragment_count(payload.len()) - 1 - counter);
     let end = start + usize::from(dlc);
-    // Payload part as one block copy (this runs in the slot handler on every load).
+    // This runs in the slot handler on every load: a whole 8-byte chunk is a constant-size
+    // copy (two word moves); a partial one is packed into a word, because a variable-size
+    // copy becomes a `memcpy` call that costs more than the rest of this function.
     let from_payload = end.min(payload.len()).saturating_sub(start);
-    if let (Some(src), Some(dst)) = (payload.get(start..start + from_payload), out.get_mut(..from_payload)) {
-        dst.copy_from_slice(src);
+    if let Some(chunk) = payload.get(start..start + 8).filter(|_| from_payload == 8) {
+        out.copy_from_slice(chunk);
+    } else if let Some(src) = payload.get(start..start + from_payload) {
+        *out = pack_le(src).to_le_bytes();
     }
     // Past the payload come the CRC bytes (only multi-frame messages reach them).
     let crc = crc.to_le_bytes();
@@ -120,6 +124,11 @@ pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -
         }
     }
     dlc
+}
+
+/// Up to 8 bytes as a little-endian word (bytes past the slice are zero).
+fn pack_le(bytes: &[u8]) -> u64 {
+    bytes.iter().take(8).enumerate().fold(0, |w, (k, b)| w | (*b as u64) << (8 * k))
 }
 
 /// Why a received frame was dropped.
@@ -190,7 +199,19 @@ impl RxState {
         let start = 8 * usize::from(count - 1 - counter);
         let data = frame.data();
         match buf.get_mut(start..start + data.len()) {
-            Some(dst) => dst.copy_from_slice(data),
+            // At most 8 bytes: a constant-size copy for a full frame (two word moves), a
+            // short loop otherwise (a variable-size `memcpy` call costs more on Cortex-M3).
+            Some(dst) if data.len() == 8 => {
+                if let (Ok(d), Ok(b)) = (<&mut [u8; 8]>::try_from(dst), <&[u8; 8]>::try_from(data)) {
+                    *d = *b;
+                }
+            }
+            Some(dst) => {
+                let w = pack_le(data).to_le_bytes();
+                for (d, b) in dst.iter_mut().zip(w) {
+                    *d = b;
+                }
+            }
             None => return RxStep::Dropped(RxDrop::BadSize), // unreachable: size checked above
         }
         if first {

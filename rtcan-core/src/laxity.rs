@@ -29,7 +29,14 @@ impl LaxityEncoding {
         if laxity_ns < 0 {
             return None;
         }
-        let v = laxity_ns as u64 / self.unit();
+        let unit = self.unit();
+        // Cortex-M3 divides 32-bit integers in hardware but 64-bit ones in a library
+        // routine; laxities that matter (below ~4.3 s) take the 32-bit path.
+        let v = if laxity_ns <= u32::MAX as SNanos && unit <= u32::MAX as u64 {
+            (laxity_ns as u32 / unit as u32) as u64
+        } else {
+            laxity_ns as u64 / unit
+        };
         let offset = match self {
             LaxityEncoding::Linear { .. } => v,
             LaxityEncoding::Log { .. } => log_offset(v),

@@ -1,55 +1,64 @@
 //! SRT/NRT transmit queue: EDF by absolute deadline, fixed capacity, O(log n).
 //!
-//! A binary min-heap on `(key, seq)`: `seq` is a 64-bit insertion counter, so items with
-//! equal keys leave in insertion order (FIFO) and the counter never wraps in practice.
+//! A binary min-heap on `(key, seq)`: `seq` is an insertion counter compared by wrapping
+//! distance, so items with equal keys leave in insertion order (FIFO).
 //! The 2014 C code kept a sorted linked list whose insert compared the wrong node after
 //! commit 27d8cde (original-rtcan-code.md §5); a heap with an explicit tie-break cannot
 //! get that order wrong.
 use heapless::Vec;
 
+/// Heap entry: the ordering key and where the item lives. Items never move while
+/// queued; sifting swaps these 16-byte entries only (swapping whole items cost a
+/// `memcpy` call per level on Cortex-M3).
 #[derive(Clone, Copy, Debug)]
-struct Entry<T> {
+struct Entry {
     key: u64,
-    seq: u64,
-    item: T,
+    seq: u32,
+    slot: u8,
 }
 
-impl<T> Entry<T> {
+impl Entry {
     fn before(&self, other: &Self) -> bool {
-        (self.key, self.seq) < (other.key, other.seq)
+        // `seq` wraps after 2^32 pushes; compare by wrapping distance so FIFO among
+        // equal keys holds for any two entries less than 2^31 pushes apart.
+        self.key < other.key
+            || (self.key == other.key && (self.seq.wrapping_sub(other.seq) as i32) < 0)
     }
 }
 
 /// A min-queue on `key` (absolute bus-time deadline; NRT uses `u64::MAX`), FIFO among
-/// equal keys, capacity `N`, no allocation.
+/// equal keys, capacity `N` (at most 256), no allocation.
 pub struct EdfQueue<T, const N: usize> {
-    heap: Vec<Entry<T>, N>,
-    seq: u64,
+    heap: Vec<Entry, N>,
+    items: [Option<T>; N],
+    seq: u32,
 }
 
 impl<T: Copy, const N: usize> EdfQueue<T, N> {
     /// Empty queue.
     pub const fn new() -> Self {
-        EdfQueue {
-            heap: Vec::new(),
-            seq: 0,
-        }
+        EdfQueue { heap: Vec::new(), items: [None; N], seq: 0 }
     }
     /// Inserts; `Err(item)` when full (reported to the caller, never dropped silently).
     pub fn push(&mut self, key: u64, item: T) -> Result<(), T> {
-        let entry = Entry {
-            key,
-            seq: self.seq,
-            item,
+        let Some(slot) = self.items.iter().position(Option::is_none).filter(|&s| s <= u8::MAX as usize) else {
+            return Err(item);
         };
-        self.heap.push(entry).map_err(|e| e.item)?;
+        let entry = Entry { key, seq: self.seq, slot: slot as u8 };
+        if self.heap.push(entry).is_err() {
+            return Err(item);
+        }
+        if let Some(place) = self.items.get_mut(slot) {
+            *place = Some(item);
+        }
         self.seq = self.seq.wrapping_add(1);
         self.sift_up(self.heap.len() - 1);
         Ok(())
     }
     /// Smallest key and its item.
     pub fn peek(&self) -> Option<(u64, &T)> {
-        self.heap.first().map(|e| (e.key, &e.item))
+        let e = self.heap.first()?;
+        Some((e.key, self.items.get(e.slot as usize)?.as_ref()?))
     }
     /// Removes the smallest.
     pub fn pop(&mut self) -> Option<(u64, T)> {
@@ -57,18 +66,16 @@ impl<T: Copy, const N: usize> EdfQueue<T, N> {
     }
     /// Removes and returns the smallest-key item satisfying `pred` (O(n) scan; used
     /// near window ends, where the most urgent frame may not fit but a shorter one does).
-    /// Among equal keys the earliest inserted wins.
-    pub fn pop_first_matching(
-        &mut self,
-        mut pred: impl FnMut(u64, &T) -> bool,
-    ) -> Option<(u64, T)> {
-        let mut best: Option<(usize, &Entry<T>)> = None;
+    pub fn pop_first_matching(&mut self, mut pred: impl FnMut(u64, &T) -> bool) -> Option<(u64, T)> {
+        let mut best: Option<(usize, Entry)> = None;
         for (i, e) in self.heap.iter().enumerate() {
-            if best.is_some_and(|(_, b)| !e.before(b)) {
+            if best.is_some_and(|(_, b)| !e.before(&b)) {
                 continue;
             }
-            if pred(e.key, &e.item) {
-                best = Some((i, e));
+            if let Some(Some(item)) = self.items.get(e.slot as usize) {
+                if pred(e.key, item) {
+                    best = Some((i, *e));
+                }
             }
         }
         let i = best.map(|(i, _)| i)?;
@@ -82,21 +89,22 @@ impl<T: Copy, const N: usize> EdfQueue<T, N> {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// True if `len() == N`.
+    /// True if full.
     pub fn is_full(&self) -> bool {
         self.heap.is_full()
     }
-    /// Removes every item (the insertion counter keeps running).
+    /// Removes everything.
     pub fn clear(&mut self) {
         self.heap.clear();
+        self.items = [None; N];
     }
-    /// All items in heap order (not sorted), e.g. to re-key or inspect them.
+    /// Items in heap order (not sorted).
     pub fn iter(&self) -> impl Iterator<Item = (u64, &T)> {
-        self.heap.iter().map(|e| (e.key, &e.item))
+        self.heap
+            .iter()
+            .filter_map(|e| Some((e.key, self.items.get(e.slot as usize)?.as_ref()?)))
     }
 
-    /// Removes the entry at heap position `i`: the last entry takes its place and moves
-    /// down or up, whichever restores the heap.
     fn remove_at(&mut self, i: usize) -> Option<(u64, T)> {
         let last = self.heap.len().checked_sub(1)?;
         if i > last {
@@ -108,7 +116,8 @@ impl<T: Copy, const N: usize> EdfQueue<T, N> {
             let i = self.sift_down(i);
             self.sift_up(i);
         }
-        Some((e.key, e.item))
+        let item = self.items.get_mut(e.slot as usize)?.take()?;
+        Some((e.key, item))
     }
 
     fn before(&self, a: usize, b: usize) -> bool {
@@ -129,7 +138,6 @@ impl<T: Copy, const N: usize> EdfQueue<T, N> {
         }
     }
 
-    /// Returns the final position.
     fn sift_down(&mut self, mut i: usize) -> usize {
         loop {
             let (l, r) = (2 * i + 1, 2 * i + 2);

@@ -40,26 +40,99 @@ pub const fn worst_case_ns(dlc: u8, bitrate: u32) -> Nanos {
 /// Exact length in bits of this concrete frame (real stuff bits over SOF..CRC computed on
 /// the actual ID, DLC, data and CRC-15), including EOF and the 3-bit intermission.
 pub fn exact_bits(frame: &Frame) -> u32 {
-    let mut w = BitWriter::new();
+    // The stuffed part SOF..data as one MSB-first word (at most 39 + 64 = 103 bits).
     let id = frame.id().raw();
-    w.push(false); // SOF, dominant
-    w.push_field(id >> 18, 11); // base ID = ID[28:18]
-    w.push(true); // SRR, recessive
-    w.push(true); // IDE, recessive (extended frame)
-    w.push_field(id, 18); // extension = ID[17:0]
-    w.push(false); // RTR: data frame
-    w.push(false); // r1
-    w.push(false); // r0
-    w.push_field(u32::from(frame.dlc()), 4);
+    let mut stream: u128 = 0;
+    let mut n: u32 = 0;
+    let mut put = |v: u32, bits: u32| {
+        stream = (stream << bits) | (v as u128 & ((1u128 << bits) - 1));
+        n += bits;
+    };
+    put(0, 1); // SOF, dominant
+    put(id >> 18, 11); // base ID = ID[28:18]
+    put(0b11, 2); // SRR, IDE recessive (extended frame)
+    put(id, 18); // extension = ID[17:0]
+    put(0, 3); // RTR (data frame), r1, r0
+    put(u32::from(frame.dlc()), 4);
     for &byte in frame.data() {
-        w.push_field(u32::from(byte), 8);
+        put(u32::from(byte), 8);
     }
-    let crc = w.crc;
-    // The CRC sequence is stuffed but not part of its own computation.
-    for i in (0..15).rev() {
-        w.stuff((crc >> i) & 1 == 1);
+    let crc = crc15(stream, n);
+    // The CRC sequence is stuffed too, but not part of its own computation.
+    let total = n + 15;
+    let stream = (stream << 15) | crc as u128;
+    total + stuff_bits(stream, total) + TAIL_BITS
+}
+
+/// CRC-15/CAN of the `n` low bits of `stream` (MSB first): the leading `n mod 8` bits one
+/// at a time, then whole bytes through a table.
+fn crc15(stream: u128, n: u32) -> u16 {
+    let mut crc: u16 = 0;
+    let lead = n % 8;
+    for i in (n - lead..n).rev() {
+        let bit = (stream >> i) & 1 == 1;
+        let top = (crc >> 14) & 1 == 1;
+        crc = (crc << 1) & 0x7FFF;
+        if bit ^ top {
+            crc ^= CRC15_POLY;
+        }
     }
-    w.bits + TAIL_BITS
+    let mut i = n - lead;
+    while i >= 8 {
+        i -= 8;
+        let byte = (stream >> i) as u8;
+        let idx = ((crc >> 7) as u8 ^ byte) as usize;
+        crc = ((crc << 8) ^ CRC15_TABLE.get(idx).copied().unwrap_or(0)) & 0x7FFF;
+    }
+    crc
+}
+
+/// Byte-at-a-time table for CRC-15/CAN (MSB first).
+const CRC15_TABLE: [u16; 256] = {
+    let mut t = [0u16; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = (i as u16) << 7;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 0x4000 != 0 { (c << 1) ^ CRC15_POLY } else { c << 1 } & 0x7FFF;
+            k += 1;
+        }
+        t[i] = c;
+        i += 1;
+    }
+    t
+};
+
+/// Stuff bits inserted into the `n` low bits of `stream` (MSB first): after five equal
+/// bits a complementary bit, which itself starts the next run. Walks whole runs with a
+/// count-leading-bits instruction instead of bit by bit.
+fn stuff_bits(stream: u128, n: u32) -> u32 {
+    // Left-align so that bit `p` of the frame is bit 127 - p.
+    let s = stream << (128 - n);
+    let (mut p, mut stuffed) = (0u32, 0u32);
+    let (mut last, mut run) = (false, 0u32);
+    while p < n {
+        let rest = s << p;
+        let bit = rest >> 127 == 1;
+        let same = if bit { rest.leading_ones() } else { rest.leading_zeros() }.min(n - p);
+        if run == 0 || bit != last {
+            last = bit;
+            run = 0;
+        }
+        let needed = 5 - run;
+        if same >= needed {
+            // Five equal bits: a stuff bit of the other value follows and starts a run.
+            stuffed += 1;
+            p += needed;
+            last = !bit;
+            run = 1;
+        } else {
+            run += same;
+            p += same;
+        }
+    }
+    stuffed
 }
 
 /// Exact frame duration at `bitrate` bit/s, ns rounded up.
@@ -77,7 +150,8 @@ pub const fn min_slot_ns(bitrate: u32, guard_ns: Nanos) -> Nanos {
     worst_case_ns(8, bitrate) + guard_ns
 }
 
-/// Serialises the stuffed part of a frame bit by bit, keeping the CRC-15 and the stuff
+#[cfg(test)]
+/// Reference model for the tests: serialises the stuffed part of a frame bit by bit, keeping the CRC-15 and the stuff
 /// state; counts bits on the wire (stuff bits included).
 struct BitWriter {
     crc: u16,
@@ -86,6 +160,7 @@ struct BitWriter {
     run: u32,
 }
 
+#[cfg(test)]
 impl BitWriter {
     const fn new() -> Self {
         // `run = 0` so the SOF starts the first run whatever `last` says.
@@ -128,6 +203,54 @@ impl BitWriter {
             self.bits += 1;
             self.last = !bit;
             self.run = 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::id::CanId;
+
+    /// The bit-by-bit reference (`BitWriter`) and the fast path agree on every frame.
+    #[test]
+    fn fast_exact_bits_matches_the_bitwise_reference() {
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for k in 0..20_000u32 {
+            let r = next();
+            // Mix random IDs with all-zero / all-one ones (maximal stuffing).
+            let raw = match k % 4 {
+                0 => 0,
+                1 => CanId::MAX_RAW,
+                _ => (r as u32) & CanId::MAX_RAW,
+            };
+            let dlc = (k % 9) as usize;
+            let data = if k % 3 == 0 { [0u8; 8] } else { next().to_le_bytes() };
+            let frame = Frame::new(CanId::from_raw(raw).unwrap(), &data[..dlc]).unwrap();
+            let mut w = BitWriter::new();
+            w.push(false);
+            w.push_field(raw >> 18, 11);
+            w.push(true);
+            w.push(true);
+            w.push_field(raw, 18);
+            w.push(false);
+            w.push(false);
+            w.push(false);
+            w.push_field(dlc as u32, 4);
+            for &b in frame.data() {
+                w.push_field(u32::from(b), 8);
+            }
+            let crc = w.crc;
+            for i in (0..15).rev() {
+                w.stuff((crc >> i) & 1 == 1);
+            }
+            assert_eq!(exact_bits(&frame), w.bits + TAIL_BITS, "frame {raw:08X} dlc {dlc}");
         }
     }
 }

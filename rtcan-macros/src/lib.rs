@@ -50,16 +50,37 @@ pub fn robot(input: TokenStream) -> TokenStream {
         Ok(i) => i,
         Err(e) => return e.to_compile_error().into(),
     };
-    expand(&input).into()
+    let caller = proc_macro::Span::call_site().local_file();
+    expand(&input, caller).into()
 }
 
-fn expand(input: &Input) -> proc_macro2::TokenStream {
-    let span = input.file.span();
-    let rel = input.file.value();
+/// `rel` under the calling crate's manifest directory; if no such file exists there,
+/// under the nearest ancestor directory of the calling source file that has it. The
+/// fallback is what lets a crate compiled elsewhere from this crate's sources (trybuild
+/// UI tests build `tests/ui/*.rs` in a scratch crate under `target/`) find its robot.
+fn resolve(rel: &str, caller: Option<PathBuf>) -> PathBuf {
     let base = std::env::var_os("CARGO_MANIFEST_DIR")
         .map(PathBuf::from)
         .unwrap_or_default();
-    let abs = base.join(&rel);
+    let primary = base.join(rel);
+    if primary.exists() {
+        return primary;
+    }
+    caller
+        .as_deref()
+        .and_then(|file| {
+            file.ancestors()
+                .skip(1)
+                .map(|dir| dir.join(rel))
+                .find(|p| p.is_file())
+        })
+        .unwrap_or(primary)
+}
+
+fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
+    let span = input.file.span();
+    let rel = input.file.value();
+    let abs = resolve(&rel, caller);
     let source = match std::fs::read_to_string(&abs) {
         Ok(s) => s,
         Err(e) => {

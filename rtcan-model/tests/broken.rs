@@ -1,7 +1,12 @@
 //! Every file in robots/broken/ fails with its diagnostic, rendered exactly as in the
 //! `.stderr` file beside it (file:line:col, excerpt, caret, help). `BLESS=1` rewrites the
 //! expected files (review the diff).
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use rtcan_model::{analyze, Code, Status};
 use std::path::PathBuf;

@@ -1,5 +1,10 @@
 //! Shape of `rtcan check --json` (documented in docs/ROBOT_TOML.md).
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use rtcan_model::{analyze, report};
 use serde_json::Value;

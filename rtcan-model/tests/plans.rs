@@ -1,5 +1,10 @@
 //! The two reference robots: Triskar2 (robot.toml) and the RTCAN paper benchmark.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use rtcan_core::tables::CalEntry;
 use rtcan_core::{Class, MsgId};
@@ -274,4 +279,18 @@ fn fingerprint_is_stable_and_sensitive() {
     );
     assert_ne!(changed, src);
     assert_ne!(analyze("robot.toml", &changed).plan.unwrap().fingerprint, a);
+}
+
+#[test]
+fn two_hundred_hrt_topics_on_64_slots() {
+    let start = std::time::Instant::now();
+    let p = Robot::load(root().join("robots/hrt200.toml")).unwrap();
+    let elapsed = start.elapsed();
+    assert_eq!(p.topics.len(), 200);
+    assert_eq!(p.bus.hyperperiod_slots, 1024);
+    // 40 x 16 + 80 x 2 + 80 x 1 per 1024-slot hyperperiod.
+    assert_eq!(p.reserved_slots(), 880);
+    assert_eq!(p.module("sink").unwrap().banks.len(), 3);
+    // Generous bound for an unoptimised test build on a shared 2-core machine.
+    assert!(elapsed.as_secs() < 10, "{elapsed:?}");
 }

@@ -1,6 +1,11 @@
 //! Malformed input never panics: byte-level mutations (proptest), every line removed in
 //! turn, and every value replaced by hostile ones.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use proptest::prelude::*;
 use rtcan_model::{analyze, Status};

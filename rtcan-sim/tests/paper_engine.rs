@@ -81,9 +81,17 @@ fn four_policies_on_one_trace() {
     // Overload handling (drop hopeless, fit window ends) delivers more on time than the
     // paper's policy on the same trace; the omniscient EDF is within a few percent.
     let on_time = |i: usize| rtcan_sim::compare::on_time(&c.runs[i]);
-    assert!(on_time(1) > on_time(0), "ours {} paper {}", on_time(1), on_time(0));
+    assert!(
+        on_time(1) > on_time(0),
+        "ours {} paper {}",
+        on_time(1),
+        on_time(0)
+    );
     assert!(on_time(2) as f64 >= 0.97 * on_time(1) as f64);
     // Without TDMA the HRT messages miss periods.
     assert!(c.runs[3].figures.hrt.iter().map(|h| h.misses).sum::<u64>() > 0);
-    assert!(c.offered_fraction > 1.0, "the paper's load does not fit its free windows");
+    assert!(
+        c.offered_fraction > 1.0,
+        "the paper's load does not fit its free windows"
+    );
 }

@@ -142,6 +142,9 @@ fn main() -> ! {
             now = m.poll(now, &mut can, &mut host);
         });
         let loaded = can.loads - before;
+        if n > 1000 {
+            hprintln!("DEBUG boundary {} slot {} loaded {} n {}", boundary, slot, loaded, n);
+        }
         match (slot, loaded) {
             (0, _) => sync.add(n),
             (_, 0) if MASKS[0] >> slot & 1 == 1 => idle.add(n),
