@@ -31,7 +31,10 @@ fn main() {
     let source = match std::fs::read_to_string(&path) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("error: cannot read robot description `{}`: {e}", path.display());
+            eprintln!(
+                "error: cannot read robot description `{}`: {e}",
+                path.display()
+            );
             exit(1);
         }
     };
@@ -42,7 +45,7 @@ fn main() {
             // Every diagnostic at once, as `rtcan check` prints them.
             eprint!("{}", analysis.diagnostics.render());
             println!(
-                "cargo::error={} has {} error(s); see the diagnostics above",
+                "cargo::error={} has {} error(s), shown rustc-style in the build script stderr below",
                 shown,
                 analysis.diagnostics.items.len()
             );

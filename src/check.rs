@@ -74,18 +74,45 @@ mod tests {
     #[test]
     fn arena_and_order_checks() {
         let rx = [
-            RxTopic { msg_id: MsgId(0x140), size: 8, arena_offset: 0 },
-            RxTopic { msg_id: MsgId(0x141), size: 12, arena_offset: 8 },
+            RxTopic {
+                msg_id: MsgId(0x140),
+                size: 8,
+                arena_offset: 0,
+            },
+            RxTopic {
+                msg_id: MsgId(0x141),
+                size: 12,
+                arena_offset: 8,
+            },
         ];
-        let tx = [TxTopic { msg_id: MsgId(0x142), class: Class::Hrt, size: 8, deadline_ns: 0 }];
-        let cal = [CalEntry { slot: 1, tx: 0, fragment: 0 }];
+        let tx = [TxTopic {
+            msg_id: MsgId(0x142),
+            class: Class::Hrt,
+            size: 8,
+            deadline_ns: 0,
+        }];
+        let cal = [CalEntry {
+            slot: 1,
+            tx: 0,
+            fragment: 0,
+        }];
         assert_eq!(arena_bytes(&rx), 8 + 14);
         assert!(tables_fit(&tables(&rx, &cal, &tx), 2, 22));
-        assert!(!tables_fit(&tables(&rx, &cal, &tx), 2, 21), "arena too small");
+        assert!(
+            !tables_fit(&tables(&rx, &cal, &tx), 2, 21),
+            "arena too small"
+        );
         assert!(!tables_fit(&tables(&rx, &cal, &tx), 1, 22), "rx count");
         let unsorted = [rx[1], rx[0]];
         assert!(!tables_fit(&tables(&unsorted, &cal, &tx), 2, 22));
-        let bad_cal = [CalEntry { slot: 1, tx: 1, fragment: 0 }];
-        assert!(!tables_fit(&tables(&rx, &bad_cal, &tx), 2, 22), "tx index out of table");
+        let bad_cal = [CalEntry {
+            slot: 1,
+            tx: 1,
+            fragment: 0,
+        }];
+        assert!(
+            !tables_fit(&tables(&rx, &bad_cal, &tx), 2, 22),
+            "tx index out of table"
+        );
     }
 }

@@ -2,7 +2,12 @@
 //! with their engines and `ModuleHost`s on an ideal bus: a typed HRT message (IR ranges,
 //! proximity → gateway) in its reserved slots and a typed SRT message (teleop command,
 //! gateway → proximity) by deadline, through the generated filters, tables and handles.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 mod common;
 
@@ -66,7 +71,9 @@ fn gateway_and_proximity_exchange_typed_hrt_and_srt_messages() {
     assert_eq!(period, 240 * slot);
     bus.run(t_pub + period + cycle);
 
-    let got = gateway::nodes::ros_bridge::proximity_sub().try_recv().unwrap();
+    let got = gateway::nodes::ros_bridge::proximity_sub()
+        .try_recv()
+        .unwrap();
     assert_eq!(*got, ranges);
     let got_cmd = proximity::nodes::obstacle_avoid::teleop_sub()
         .try_recv()
@@ -98,14 +105,19 @@ fn gateway_and_proximity_exchange_typed_hrt_and_srt_messages() {
         "HRT frame in slot {cal_slot}, calendar {:?}",
         proximity::CALENDAR
     );
-    assert!((hrt[0].sof - slot) % slot < slot / 4, "starts at the slot boundary");
+    assert!(
+        (hrt[0].sof - slot) % slot < slot / 4,
+        "starts at the slot boundary"
+    );
     let srt: Vec<_> = bus
         .log
         .iter()
         .filter(|f| f.frame.id().msg_id() == topics::TELEOP.msg_id)
         .collect();
     assert_eq!(srt.len(), usize::from(topics::TELEOP.fragments));
-    assert!(srt.iter().all(|f| (1..=62).contains(&f.frame.id().laxity()) && f.node == gw));
+    assert!(srt
+        .iter()
+        .all(|f| (1..=62).contains(&f.frame.id().laxity()) && f.node == gw));
 
     // Every frame on this bus (sync, heartbeats, the two topics) is meant for the other
     // module: the generated filters passed all of them.

@@ -27,7 +27,11 @@ fn plan(file: &str) -> Plan {
 fn bytes<M: Message>(m: &M) -> Vec<u8> {
     let mut out = vec![0u8; M::SIZE];
     m.encode(&mut out);
-    assert_eq!(M::decode(&out).map(|d| bytes_of(&d)), Some(out.clone()), "round trip");
+    assert_eq!(
+        M::decode(&out).map(|d| bytes_of(&d)),
+        Some(out.clone()),
+        "round trip"
+    );
     out
 }
 
@@ -54,10 +58,7 @@ fn triskar_messages_encode_little_endian_packed() {
     let w = robot::WheelSpeeds {
         w: [1.0, -2.0, 0.5],
     };
-    assert_eq!(
-        bytes(&w),
-        [0, 0, 0x80, 0x3F, 0, 0, 0, 0xC0, 0, 0, 0, 0x3F]
-    );
+    assert_eq!(bytes(&w), [0, 0, 0x80, 0x3F, 0, 0, 0, 0xC0, 0, 0, 0, 0x3F]);
     let mut text = [0u8; 29];
     text[..2].copy_from_slice(b"ok");
     let l = robot::LogLine {
@@ -72,7 +73,14 @@ fn triskar_messages_encode_little_endian_packed() {
     // Wrong lengths decode to None, never a panic.
     assert_eq!(robot::Encoder::decode(&[0; 7]), None);
     assert_eq!(robot::Encoder::decode(&[0; 9]), None);
-    assert_eq!(robot::Battery::default(), robot::Battery { mv: 0, ma: 0, pct: 0 });
+    assert_eq!(
+        robot::Battery::default(),
+        robot::Battery {
+            mv: 0,
+            ma: 0,
+            pct: 0
+        }
+    );
 }
 
 #[test]
@@ -101,7 +109,10 @@ fn every_field_type_has_its_exact_encoding() {
     expect.push(1);
     expect.extend([1, 0, 0xFF, 0xFF, 0x34, 0x12]);
     expect.extend([0, 1]);
-    assert_eq!(codec::AllPrims::SIZE, 1 + 2 + 4 + 8 + 1 + 2 + 4 + 8 + 4 + 8 + 1 + 6 + 2);
+    assert_eq!(
+        codec::AllPrims::SIZE,
+        1 + 2 + 4 + 8 + 1 + 2 + 4 + 8 + 4 + 8 + 1 + 6 + 2
+    );
     assert_eq!(bytes(&m), expect);
     // A bool byte other than 0/1 is rejected.
     let mut bad = expect.clone();
@@ -145,17 +156,34 @@ fn topic_constants_equal_the_plan() {
     );
     assert_eq!(robot::topics::VELOCITY.deadline_ns, Some(10_000_000));
     assert_eq!(robot::topics::LOG.fragments, 5);
-    assert!(!robot::topics::ENCODER2.on_bus || robot::topics::ENCODER2.module == 2);
+    // encoder2 is consumed on its own module (odometry on motor2): never on the bus.
+    assert_eq!(
+        (
+            robot::topics::ENCODER2.on_bus,
+            robot::topics::ENCODER2.module
+        ),
+        (false, 2)
+    );
 }
 
+type ModuleRow = (
+    &'static str,
+    rtcan::core::NodeTables<'static>,
+    &'static [(u32, u32)],
+);
+
 /// The module tables of the generated code, by module index.
-fn triskar_tables() -> Vec<(&'static str, rtcan::core::NodeTables<'static>, &'static [(u32, u32)])> {
+fn triskar_tables() -> Vec<ModuleRow> {
     vec![
         ("gateway", robot::gateway::TABLES, robot::gateway::FILTERS),
         ("motor1", robot::motor1::TABLES, robot::motor1::FILTERS),
         ("motor2", robot::motor2::TABLES, robot::motor2::FILTERS),
         ("motor3", robot::motor3::TABLES, robot::motor3::FILTERS),
-        ("proximity", robot::proximity::TABLES, robot::proximity::FILTERS),
+        (
+            "proximity",
+            robot::proximity::TABLES,
+            robot::proximity::FILTERS,
+        ),
         ("psu", robot::psu::TABLES, robot::psu::FILTERS),
     ]
 }
@@ -164,7 +192,11 @@ fn triskar_tables() -> Vec<(&'static str, rtcan::core::NodeTables<'static>, &'st
 fn module_tables_equal_the_plan_and_the_macro_output() {
     let p = plan("robot.toml");
     assert_eq!(robot::FINGERPRINT, p.fingerprint);
-    assert_eq!(triskar::FINGERPRINT, robot::FINGERPRINT, "macro and build.rs agree");
+    assert_eq!(
+        triskar::FINGERPRINT,
+        robot::FINGERPRINT,
+        "macro and build.rs agree"
+    );
     assert_eq!(robot::BUS, p.bus.config(p.fingerprint));
     assert_eq!(usize::from(robot::MASTER), p.bus.master);
     let tables = triskar_tables();
@@ -179,7 +211,10 @@ fn module_tables_equal_the_plan_and_the_macro_output() {
         assert_eq!(t.calendar, m.calendar.as_slice(), "{name}");
         assert_eq!(t.master_masks, m.master_masks.as_slice(), "{name}");
     }
-    assert_eq!(triskar::motor2::TABLES.calendar, robot::motor2::TABLES.calendar);
+    assert_eq!(
+        triskar::motor2::TABLES.calendar,
+        robot::motor2::TABLES.calendar
+    );
     // Engine sizes: motor1 receives `velocity` (12 B + CRC) only; the gateway receives
     // odometry (24+2), proximity (8), battery (5), log (32+2).
     assert_eq!(
@@ -190,7 +225,10 @@ fn module_tables_equal_the_plan_and_the_macro_output() {
     assert_eq!(robot::gateway::ARENA_BYTES, 26 + 8 + 5 + 34);
     // psu sends battery and log (NRT, queues 1 and 4) and its heartbeat.
     assert_eq!(robot::psu::QUEUE_CAPACITY, 1 + 1 + 4);
-    assert!(robot::gateway::IS_MASTER && !robot::psu::IS_MASTER);
+    assert_eq!(
+        (robot::gateway::IS_MASTER, robot::psu::IS_MASTER),
+        (true, false)
+    );
 }
 
 /// Every identifier topic `t` can appear with on the wire.
@@ -233,7 +271,10 @@ fn check_filters(p: &Plan, filters: &[(&str, &[(u32, u32)])]) {
             assert!(rtcan::filters_pass(f, hb), "{name}: heartbeat {module}");
         }
         // Nothing else: an SRT frame with a sync-range message ID is rejected.
-        assert!(!rtcan::filters_pass(f, CanId::new(5, MsgId(0x10), 0).unwrap().raw()));
+        assert!(!rtcan::filters_pass(
+            f,
+            CanId::new(5, MsgId(0x10), 0).unwrap().raw()
+        ));
     }
 }
 
@@ -282,7 +323,10 @@ fn master_masks_equal_the_model_and_the_paper_reserves_40_of_60() {
     assert_eq!(union.as_slice(), robot::MASTER_MASKS.as_slice());
 
     let paper_plan = plan("robots/rtcan-paper.toml");
-    assert_eq!(paper::MASTER_MASKS.as_slice(), paper_plan.master_masks.as_slice());
+    assert_eq!(
+        paper::MASTER_MASKS.as_slice(),
+        paper_plan.master_masks.as_slice()
+    );
     assert_eq!(paper::BUS.slots_per_cycle, 60);
     assert!(!paper::MASTER_MASKS.is_empty());
     for m in paper::MASTER_MASKS {
@@ -297,10 +341,25 @@ fn typed_handles_publish_and_subscribe_locally() {
     use robot::motor2::nodes::{motor_ctrl2, odometry};
     let sub = odometry::encoder2_sub();
     motor_ctrl2::encoder2_pub()
-        .send(robot::Encoder { ticks: 7, speed: 0.25 }, 1_000)
+        .send(
+            robot::Encoder {
+                ticks: 7,
+                speed: 0.25,
+            },
+            1_000,
+        )
         .unwrap();
     let m = sub.try_recv().unwrap();
-    assert_eq!((*m, m.stamp()), (robot::Encoder { ticks: 7, speed: 0.25 }, 1_000));
+    assert_eq!(
+        (*m, m.stamp()),
+        (
+            robot::Encoder {
+                ticks: 7,
+                speed: 0.25
+            },
+            1_000
+        )
+    );
     assert_eq!(motor_ctrl2::PRIORITY, 3);
     assert_eq!(odometry::NODE.name(), "odometry");
 }

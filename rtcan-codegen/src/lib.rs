@@ -39,7 +39,13 @@ pub struct Options {
 
 /// Every generated item for `plan`.
 pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
-    let reserved = names::reserved_clashes(plan);
+    // Layout limits of this generator: report them alone, without the items that would
+    // add follow-up errors.
+    let mut limits = names::reserved_clashes(plan);
+    limits.extend(module::pool_errors(plan));
+    if !limits.is_empty() {
+        return limits;
+    }
     let messages = plan.types.iter().map(message::message);
     let topics = tables::topic_infos(plan);
     let bus = tables::bus(plan);
@@ -49,7 +55,6 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
         .enumerate()
         .map(|(i, _)| module::module(plan, i, opts));
     quote! {
-        #reserved
         #(#messages)*
         #topics
         #bus

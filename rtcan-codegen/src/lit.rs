@@ -11,7 +11,7 @@ pub fn usize(n: usize) -> Literal {
     Literal::u128_unsuffixed(n as u128)
 }
 
-/// Hex unsuffixed integer (IDs and masks) in groups of 4 digits, e.g. `0x0001_8000_03ff`.
+/// Hex unsuffixed integer (IDs and masks) in groups of 4 digits (4, 8 or 16 digits), e.g. `0x0000_0001_8000_03ff`.
 pub fn hex(n: u64) -> Literal {
     let digits = if n > 0xFFFF_FFFF {
         16
@@ -34,6 +34,9 @@ mod tests {
     fn hex_groups_of_four() {
         assert_eq!(super::hex(0x140).to_string(), "0x0140");
         assert_eq!(super::hex(0x1fff_8000).to_string(), "0x1fff_8000");
-        assert_eq!(super::hex(0x1_8000_03ff).to_string(), "0x0001_8000_03ff");
+        assert_eq!(
+            super::hex(0x1_8000_03ff).to_string(),
+            "0x0000_0001_8000_03ff"
+        );
     }
 }

@@ -23,6 +23,16 @@ struct Local<'p> {
 }
 
 impl Local<'_> {
+    /// Pool blocks (the formula `rtcan_pubsub::Topic` is sized with, one loan).
+    fn pool(&self) -> usize {
+        rtcan_pubsub::pool_blocks(
+            self.subs.len(),
+            usize::from(self.queue),
+            self.remote_blocks(),
+            1,
+        )
+    }
+
     /// Blocks the engine side may hold (see `rtcan_pubsub::pool_blocks`).
     fn remote_blocks(&self) -> usize {
         match self.remote {
@@ -45,7 +55,13 @@ fn locals(plan: &Plan, mi: usize) -> Vec<Local<'_>> {
                 .filter(|s| s.module == mi)
                 .map(|s| s.node)
                 .collect(),
-            queue: t.subscribers.iter().map(|s| s.queue).max().unwrap_or(1).max(1),
+            queue: t
+                .subscribers
+                .iter()
+                .map(|s| s.queue)
+                .max()
+                .unwrap_or(1)
+                .max(1),
             remote: (t.module == mi && t.on_bus).then_some(t.class),
         })
         .collect()
@@ -87,6 +103,30 @@ fn filters(m: &ModulePlan, plan: &Plan) -> (Vec<TokenStream>, Vec<TokenStream>, 
         }
     }
     (banks, flat, docs)
+}
+
+/// `compile_error!`s for topics whose pool exceeds what `rtcan_pubsub::Topic` supports
+/// (the model accepts queue lengths up to 255; a pool is a `u32` free mask).
+pub fn pool_errors(plan: &Plan) -> TokenStream {
+    let mut errs = Vec::new();
+    for (mi, m) in plan.modules.iter().enumerate() {
+        for l in locals(plan, mi) {
+            let n = l.pool();
+            if n > MAX_POOL {
+                let msg = format!(
+                    "{}: topic `{}` needs {n} message blocks on module `{}` ({} local subscriber(s) with queues of {}, {} for the bus, 1 loan); a topic has at most {MAX_POOL}: shorten its subscriber queues",
+                    plan.file,
+                    l.topic.name,
+                    m.name,
+                    l.subs.len(),
+                    l.queue,
+                    l.remote_blocks()
+                );
+                errs.push(quote! { ::core::compile_error!(#msg); });
+            }
+        }
+    }
+    quote! { #(#errs)* }
 }
 
 /// The generated `pub mod <name>` of module `mi`.
@@ -163,18 +203,16 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
         let k = lit::usize(k);
         Some(quote! { pub const #c: u8 = #k; })
     });
-    let tx_ports: Vec<_> = m
-        .tx
-        .iter()
-        .filter_map(|ti| plan.topics.get(*ti))
-        .map(|t| names::upper(&t.name))
-        .collect();
-    let rx_ports: Vec<_> = m
-        .rx
-        .iter()
-        .filter_map(|ti| plan.topics.get(*ti))
-        .map(|t| names::upper(&t.name))
-        .collect();
+    let tx_ports: Vec<_> =
+        m.tx.iter()
+            .filter_map(|ti| plan.topics.get(*ti))
+            .map(|t| names::upper(&t.name))
+            .collect();
+    let rx_ports: Vec<_> =
+        m.rx.iter()
+            .filter_map(|ti| plan.topics.get(*ti))
+            .map(|t| names::upper(&t.name))
+            .collect();
 
     // ---- nodes and their typed handles ----
     let node_mods = m.nodes.iter().filter_map(|ni| {
@@ -272,7 +310,10 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
         m.board.name(),
         if m.is_master { ", bus master" } else { "" }
     );
-    let mismatch = format!("module `{}`: tables do not match the engine's sizes", m.name);
+    let mismatch = format!(
+        "module `{}`: tables do not match the engine's sizes",
+        m.name
+    );
 
     quote! {
         #[doc = #doc]

@@ -61,7 +61,11 @@ pub enum TablesError {
 }
 
 /// Checks `tables` against the engine sizes `rx`, `arena` (const: usable in a const assert).
-pub const fn check_tables(tables: &NodeTables<'_>, rx: usize, arena: usize) -> Result<(), TablesError> {
+pub const fn check_tables(
+    tables: &NodeTables<'_>,
+    rx: usize,
+    arena: usize,
+) -> Result<(), TablesError> {
     let bus = &tables.bus;
     if bus.slots_per_cycle < 2
         || bus.slots_per_cycle > 64
@@ -144,7 +148,10 @@ struct TxCrc {
 }
 
 impl TxCrc {
-    const NEW: TxCrc = TxCrc { value: CRC16_INIT, upto: 0 };
+    const NEW: TxCrc = TxCrc {
+        value: CRC16_INIT,
+        upto: 0,
+    };
 
     /// Covers the payload bytes of fragment `counter`, then returns the CRC to use for
     /// it (complete whenever the fragment reaches the CRC bytes: they follow the payload).
@@ -449,7 +456,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let run = free_run(self.cycle_mask, slot, spc);
-        self.window_end = self.pos.boundary(slot + run).saturating_sub(self.tables.bus.guard_ns);
+        self.window_end = self
+            .pos
+            .boundary(slot + run)
+            .saturating_sub(self.tables.bus.guard_ns);
         self.refill(now, can, host);
     }
 
@@ -481,12 +491,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
     }
 
-    fn start_cycle(
-        &mut self,
-        late: bool,
-        can: &mut impl Controller,
-        host: &mut impl Host,
-    ) {
+    fn start_cycle(&mut self, late: bool, can: &mut impl Controller, host: &mut impl Host) {
         if self.master {
             let idx = self.pos.cycle_in_hyper as usize;
             self.cycle_mask = self
@@ -563,7 +568,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
             }
             match host.hrt_sample(tx) {
-                Some(token) => self.hrt = Some(HrtTransfer { tx, token, crc: TxCrc::NEW }),
+                Some(token) => {
+                    self.hrt = Some(HrtTransfer {
+                        tx,
+                        token,
+                        crc: TxCrc::NEW,
+                    })
+                }
                 None => {
                     Counters::bump(&mut self.counters.hrt_empty);
                     host.tx_done(tx, None, TxOutcome::NothingToSend);
@@ -840,7 +851,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         // cycle): offset from this SOF, slot length from the estimated rate.
         let start_bus = abs_cycle * cycle_ns;
         let start_local = self.clock.to_local(start_bus);
-        let cycle_local = self.clock.to_local(start_bus + cycle_ns).saturating_sub(start_local).max(1);
+        let cycle_local = self
+            .clock
+            .to_local(start_bus + cycle_ns)
+            .saturating_sub(start_local)
+            .max(1);
         self.pos.start_bus = start_bus;
         self.pos.start_local = start_local;
         self.pos.slot_q16 = (cycle_local << 16) / bus.slots_per_cycle.max(1) as u64;

@@ -72,7 +72,9 @@ pub fn crc16_update(mut crc: u16, data: &[u8]) -> u16 {
 
 /// Byte-wise table of the CRC-16 generator 0x1021 (512 bytes of flash, built at compile
 /// time): 8 times fewer steps than the bitwise loop.
-const CRC16_TABLE: [u16; 256] = crc16_table();
+// `static`, not `const`: a const array indexed at run time may be copied to the stack on
+// every call. Immutable data, not state.
+static CRC16_TABLE: [u16; 256] = crc16_table();
 
 // `i < 256` is the loop bound: the index cannot panic (const fn cannot use get_mut).
 #[allow(clippy::indexing_slicing)]
@@ -128,7 +130,11 @@ pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -
 
 /// Up to 8 bytes as a little-endian word (bytes past the slice are zero).
 fn pack_le(bytes: &[u8]) -> u64 {
-    bytes.iter().take(8).enumerate().fold(0, |w, (k, b)| w | (*b as u64) << (8 * k))
+    bytes
+        .iter()
+        .take(8)
+        .enumerate()
+        .fold(0, |w, (k, b)| w | (*b as u64) << (8 * k))
 }
 
 /// Why a received frame was dropped.
@@ -202,7 +208,8 @@ impl RxState {
             // At most 8 bytes: a constant-size copy for a full frame (two word moves), a
             // short loop otherwise (a variable-size `memcpy` call costs more on Cortex-M3).
             Some(dst) if data.len() == 8 => {
-                if let (Ok(d), Ok(b)) = (<&mut [u8; 8]>::try_from(dst), <&[u8; 8]>::try_from(data)) {
+                if let (Ok(d), Ok(b)) = (<&mut [u8; 8]>::try_from(dst), <&[u8; 8]>::try_from(data))
+                {
                     *d = *b;
                 }
             }

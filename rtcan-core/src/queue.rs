@@ -37,14 +37,27 @@ pub struct EdfQueue<T, const N: usize> {
 impl<T: Copy, const N: usize> EdfQueue<T, N> {
     /// Empty queue.
     pub const fn new() -> Self {
-        EdfQueue { heap: Vec::new(), items: [None; N], seq: 0 }
+        EdfQueue {
+            heap: Vec::new(),
+            items: [None; N],
+            seq: 0,
+        }
     }
     /// Inserts; `Err(item)` when full (reported to the caller, never dropped silently).
     pub fn push(&mut self, key: u64, item: T) -> Result<(), T> {
-        let Some(slot) = self.items.iter().position(Option::is_none).filter(|&s| s <= u8::MAX as usize) else {
+        let Some(slot) = self
+            .items
+            .iter()
+            .position(Option::is_none)
+            .filter(|&s| s <= u8::MAX as usize)
+        else {
             return Err(item);
         };
-        let entry = Entry { key, seq: self.seq, slot: slot as u8 };
+        let entry = Entry {
+            key,
+            seq: self.seq,
+            slot: slot as u8,
+        };
         if self.heap.push(entry).is_err() {
             return Err(item);
         }
@@ -66,7 +79,10 @@ impl<T: Copy, const N: usize> EdfQueue<T, N> {
     }
     /// Removes and returns the smallest-key item satisfying `pred` (O(n) scan; used
     /// near window ends, where the most urgent frame may not fit but a shorter one does).
-    pub fn pop_first_matching(&mut self, mut pred: impl FnMut(u64, &T) -> bool) -> Option<(u64, T)> {
+    pub fn pop_first_matching(
+        &mut self,
+        mut pred: impl FnMut(u64, &T) -> bool,
+    ) -> Option<(u64, T)> {
         let mut best: Option<(usize, Entry)> = None;
         for (i, e) in self.heap.iter().enumerate() {
             if best.is_some_and(|(_, b)| !e.before(&b)) {

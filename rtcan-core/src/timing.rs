@@ -88,14 +88,19 @@ fn crc15(stream: u128, n: u32) -> u16 {
 }
 
 /// Byte-at-a-time table for CRC-15/CAN (MSB first).
-const CRC15_TABLE: [u16; 256] = {
+// `static`, not `const`: see fragment.rs CRC16_TABLE.
+static CRC15_TABLE: [u16; 256] = {
     let mut t = [0u16; 256];
     let mut i = 0;
     while i < 256 {
         let mut c = (i as u16) << 7;
         let mut k = 0;
         while k < 8 {
-            c = if c & 0x4000 != 0 { (c << 1) ^ CRC15_POLY } else { c << 1 } & 0x7FFF;
+            c = if c & 0x4000 != 0 {
+                (c << 1) ^ CRC15_POLY
+            } else {
+                c << 1
+            } & 0x7FFF;
             k += 1;
         }
         t[i] = c;
@@ -104,33 +109,30 @@ const CRC15_TABLE: [u16; 256] = {
     t
 };
 
-/// Stuff bits inserted into the `n` low bits of `stream` (MSB first): after five equal
-/// bits a complementary bit, which itself starts the next run. Walks whole runs with a
-/// count-leading-bits instruction instead of bit by bit.
+/// Stuff bits inserted into the `n` low bits of `stream` (MSB first, `n` < 128): after
+/// five equal bits a complementary bit, which itself starts the next run. Bit-parallel:
+/// each step finds the first run of five with word operations, so the cost is one step
+/// per stuff bit, not one per bit.
 fn stuff_bits(stream: u128, n: u32) -> u32 {
-    // Left-align so that bit `p` of the frame is bit 127 - p.
-    let s = stream << (128 - n);
-    let (mut p, mut stuffed) = (0u32, 0u32);
-    let (mut last, mut run) = (false, 0u32);
-    while p < n {
-        let rest = s << p;
-        let bit = rest >> 127 == 1;
-        let same = if bit { rest.leading_ones() } else { rest.leading_zeros() }.min(n - p);
-        if run == 0 || bit != last {
-            last = bit;
-            run = 0;
+    // Left-aligned: frame bit i is word bit 127 - i.
+    let mut s = stream << (128 - n);
+    let mut len = n;
+    let mut stuffed = 0;
+    while len >= 5 {
+        // z: bit i set when bit i equals bit i-1 (i = 1..len-1).
+        let valid = (u128::MAX >> 1) & !(u128::MAX >> len);
+        let z = !(s ^ (s >> 1)) & valid;
+        // m: bit i set when bits i-4..=i are equal.
+        let m = z & (z >> 1) & (z >> 2) & (z >> 3);
+        if m == 0 {
+            break;
         }
-        let needed = 5 - run;
-        if same >= needed {
-            // Five equal bits: a stuff bit of the other value follows and starts a run.
-            stuffed += 1;
-            p += needed;
-            last = !bit;
-            run = 1;
-        } else {
-            run += same;
-            p += same;
-        }
+        let i = m.leading_zeros();
+        stuffed += 1;
+        // The stuff bit (complement of bit i) starts the rest of the stream.
+        let stuff = !(s >> (127 - i)) & 1;
+        s = (stuff << 127) | ((s << i) << 1 >> 1);
+        len -= i;
     }
     stuffed
 }
@@ -231,7 +233,11 @@ mod tests {
                 _ => (r as u32) & CanId::MAX_RAW,
             };
             let dlc = (k % 9) as usize;
-            let data = if k % 3 == 0 { [0u8; 8] } else { next().to_le_bytes() };
+            let data = if k % 3 == 0 {
+                [0u8; 8]
+            } else {
+                next().to_le_bytes()
+            };
             let frame = Frame::new(CanId::from_raw(raw).unwrap(), &data[..dlc]).unwrap();
             let mut w = BitWriter::new();
             w.push(false);
@@ -250,7 +256,11 @@ mod tests {
             for i in (0..15).rev() {
                 w.stuff((crc >> i) & 1 == 1);
             }
-            assert_eq!(exact_bits(&frame), w.bits + TAIL_BITS, "frame {raw:08X} dlc {dlc}");
+            assert_eq!(
+                exact_bits(&frame),
+                w.bits + TAIL_BITS,
+                "frame {raw:08X} dlc {dlc}"
+            );
         }
     }
 }

@@ -194,7 +194,8 @@ fn hrt_frames_go_exactly_in_their_slots_with_drifting_slaves() {
         assert_eq!(
             slot % PERIODS[k] as u64,
             pl % PERIODS[k] as u64,
-            "topic {n}/{k} in slot {slot} cycle {cycle} sof {}", w.sof
+            "topic {n}/{k} in slot {slot} cycle {cycle} sof {}",
+            w.sof
         );
         // Within one bit time of the master's slot boundary once locked (cycle >= 3).
         let start = T0 + (cycle * 60 + slot) * SLOT_NS;
@@ -235,7 +236,12 @@ fn srt_fragmented_message_is_delivered_in_a_free_window_only() {
             .iter()
             .filter(|(rx, _, _)| p.tables[rx_node].rx[*rx as usize].msg_id == msg_id(1, 3))
             .collect();
-        assert_eq!(got.len(), 1, "node {rx_node}: {:?}", bus.nodes[rx_node].engine.counters());
+        assert_eq!(
+            got.len(),
+            1,
+            "node {rx_node}: {:?}",
+            bus.nodes[rx_node].engine.counters()
+        );
         assert_eq!(got[0].1, payload);
     }
     assert!(bus.nodes[1]
@@ -503,25 +509,67 @@ fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_crc() {
     // Master publishes a 30-byte HRT message (32 wire bytes, 4 fragments) in slots
     // 10..=13 of every cycle; a slave receives it.
     let size = 30u16;
-    let tx: &'static [TxTopic] =
-        Box::leak(Box::new([TxTopic { msg_id: MsgId(0x0150), class: Class::Hrt, size, deadline_ns: 0 }]));
+    let tx: &'static [TxTopic] = Box::leak(Box::new([TxTopic {
+        msg_id: MsgId(0x0150),
+        class: Class::Hrt,
+        size,
+        deadline_ns: 0,
+    }]));
     let cal: &'static [CalEntry] = Box::leak(Box::new([
-        CalEntry { slot: 10, tx: 0, fragment: 3 },
-        CalEntry { slot: 11, tx: 0, fragment: 2 },
-        CalEntry { slot: 12, tx: 0, fragment: 1 },
-        CalEntry { slot: 13, tx: 0, fragment: 0 },
+        CalEntry {
+            slot: 10,
+            tx: 0,
+            fragment: 3,
+        },
+        CalEntry {
+            slot: 11,
+            tx: 0,
+            fragment: 2,
+        },
+        CalEntry {
+            slot: 12,
+            tx: 0,
+            fragment: 1,
+        },
+        CalEntry {
+            slot: 13,
+            tx: 0,
+            fragment: 0,
+        },
     ]));
-    let rx: &'static [RxTopic] = Box::leak(Box::new([RxTopic { msg_id: MsgId(0x0150), size, arena_offset: 0 }]));
+    let rx: &'static [RxTopic] = Box::leak(Box::new([RxTopic {
+        msg_id: MsgId(0x0150),
+        size,
+        arena_offset: 0,
+    }]));
     let masks: &'static [u64] = Box::leak(Box::new([1u64 | 0b1111 << 10]));
-    let master = NodeTables { bus: bus(), module: 0, tx, rx: &[], calendar: cal, master_masks: masks };
-    let slave = NodeTables { bus: bus(), module: 1, tx: &[], rx, calendar: &[], master_masks: &[] };
+    let master = NodeTables {
+        bus: bus(),
+        module: 0,
+        tx,
+        rx: &[],
+        calendar: cal,
+        master_masks: masks,
+    };
+    let slave = NodeTables {
+        bus: bus(),
+        module: 1,
+        tx: &[],
+        rx,
+        calendar: &[],
+        master_masks: &[],
+    };
     let mut b = Bus::new(1_000_000);
     b.add(master, 0.0, 0.0);
     b.add(slave, -800.0, 42_000.0);
     let payload: Vec<u8> = (0..size as u8).map(|i| i ^ 0x5A).collect();
     b.nodes[0].host.hrt = vec![Some(payload.clone())];
     b.run(T0 + 6 * 60 * SLOT_NS);
-    let frames: Vec<_> = b.log.iter().filter(|w| w.frame.id().msg_id() == MsgId(0x0150)).collect();
+    let frames: Vec<_> = b
+        .log
+        .iter()
+        .filter(|w| w.frame.id().msg_id() == MsgId(0x0150))
+        .collect();
     assert_eq!(frames.len(), 6 * 4);
     for (i, w) in frames.iter().enumerate() {
         let (_, slot) = slot_of(w.sof + 1_000);
@@ -530,11 +578,36 @@ fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_crc() {
     }
     // Last fragment: payload bytes 24..30 then the CRC-16 (little-endian) of the payload.
     let crc = rtcan_core::fragment::crc16(&payload).to_le_bytes();
-    assert_eq!(frames[3].frame.data(), &[payload[24], payload[25], payload[26], payload[27], payload[28], payload[29], crc[0], crc[1]]);
-    let got: Vec<_> = b.nodes[1].host.delivered.iter().map(|d| d.1.clone()).collect();
+    assert_eq!(
+        frames[3].frame.data(),
+        &[
+            payload[24],
+            payload[25],
+            payload[26],
+            payload[27],
+            payload[28],
+            payload[29],
+            crc[0],
+            crc[1]
+        ]
+    );
+    let got: Vec<_> = b.nodes[1]
+        .host
+        .delivered
+        .iter()
+        .map(|d| d.1.clone())
+        .collect();
     assert!(got.len() >= 4, "slave receives once locked: {}", got.len());
     assert!(got.iter().all(|g| *g == payload));
-    assert_eq!(b.nodes[0].host.done.iter().filter(|d| d.2 == TxOutcome::Sent).count(), 6);
+    assert_eq!(
+        b.nodes[0]
+            .host
+            .done
+            .iter()
+            .filter(|d| d.2 == TxOutcome::Sent)
+            .count(),
+        6
+    );
 }
 
 #[test]
@@ -542,20 +615,48 @@ fn tables_that_do_not_fit_the_engine_are_rejected() {
     use rtcan_core::engine::{check_tables, TablesError};
     let p = paper(3);
     assert_eq!(check_tables(&p.tables[1], 16, 512), Ok(()));
-    assert_eq!(check_tables(&p.tables[1], 4, 512), Err(TablesError::TooManyRx));
-    assert_eq!(check_tables(&p.tables[1], 16, 64), Err(TablesError::ArenaTooSmall));
+    assert_eq!(
+        check_tables(&p.tables[1], 4, 512),
+        Err(TablesError::TooManyRx)
+    );
+    assert_eq!(
+        check_tables(&p.tables[1], 16, 64),
+        Err(TablesError::ArenaTooSmall)
+    );
     let mut t = p.tables[1];
     t.rx = Box::leak(vec![t.rx[1], t.rx[0]].into_boxed_slice());
     assert_eq!(check_tables(&t, 16, 512), Err(TablesError::RxNotSorted));
     let mut t = p.tables[1];
-    t.calendar = Box::leak(vec![CalEntry { slot: 3, tx: 9, fragment: 0 }].into_boxed_slice());
+    t.calendar = Box::leak(
+        vec![CalEntry {
+            slot: 3,
+            tx: 9,
+            fragment: 0,
+        }]
+        .into_boxed_slice(),
+    );
     assert_eq!(check_tables(&t, 16, 512), Err(TablesError::BadCalendar));
     let mut t = p.tables[1];
     t.bus.slots_per_cycle = 65;
     assert_eq!(check_tables(&t, 16, 512), Err(TablesError::BadBus));
     assert!(TestEngine::try_new(t, 0).is_err());
     // Usable in a const assertion, as the generated code does.
-    const EMPTY: NodeTables<'static> =
-        NodeTables { bus: BusConfig { bitrate: 1_000_000, slots_per_cycle: 10, slot_ns: 200_000, hyperperiod_cycles: 1, cycle_counter_wrap: 1, laxity: LaxityEncoding::Linear { unit_ns: 1 }, guard_ns: 0, fingerprint: 0 }, module: 0, tx: &[], rx: &[], calendar: &[], master_masks: &[] };
+    const EMPTY: NodeTables<'static> = NodeTables {
+        bus: BusConfig {
+            bitrate: 1_000_000,
+            slots_per_cycle: 10,
+            slot_ns: 200_000,
+            hyperperiod_cycles: 1,
+            cycle_counter_wrap: 1,
+            laxity: LaxityEncoding::Linear { unit_ns: 1 },
+            guard_ns: 0,
+            fingerprint: 0,
+        },
+        module: 0,
+        tx: &[],
+        rx: &[],
+        calendar: &[],
+        master_masks: &[],
+    };
     const _: () = assert!(check_tables(&EMPTY, 0, 0).is_ok());
 }

@@ -83,12 +83,7 @@ fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
     let abs = resolve(&rel, caller);
     let source = match std::fs::read_to_string(&abs) {
         Ok(s) => s,
-        Err(e) => {
-            return error(
-                span,
-                &format!("cannot read `{}`: {e}", abs.display()),
-            )
-        }
+        Err(e) => return error(span, &format!("cannot read `{}`: {e}", abs.display())),
     };
     // Diagnostics name the file as written, so messages are the same on every machine.
     let analysis = rtcan_model::analyze(&rel, &source);
@@ -96,7 +91,10 @@ fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
         Some(p) if analysis.diagnostics.is_empty() => p,
         _ => {
             let d = &analysis.diagnostics;
-            let errs = d.items.iter().map(|item| error(span, d.render_one(item).trim_end()));
+            let errs = d
+                .items
+                .iter()
+                .map(|item| error(span, &compile_message(d, item)));
             return quote! { #(#errs)* };
         }
     };
@@ -110,6 +108,19 @@ fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
         const _: &[u8] = include_bytes!(#abs_str);
         #code
     }
+}
+
+/// The model's rustc-style rendering, with its `error[code]: message` header turned into
+/// `message [code]`, because rustc already prints `error: ` before a `compile_error!`.
+fn compile_message(d: &rtcan_model::Diagnostics, item: &rtcan_model::Diagnostic) -> String {
+    let rendered = d.render_one(item);
+    let body = rendered.split_once('\n').map_or("", |(_, rest)| rest);
+    format!(
+        "{} [{}]\n{}",
+        item.message,
+        item.code.name(),
+        body.trim_end()
+    )
 }
 
 fn error(span: Span, msg: &str) -> proc_macro2::TokenStream {

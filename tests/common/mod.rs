@@ -2,7 +2,12 @@
 //! rtcan-core/tests/common): bit-accurate frame durations, arbitration by identifier,
 //! bxCAN-like mailboxes, every receiver applying its generated acceptance filters, and
 //! each module's engine driving its generated `ModuleHost`. Clocks are ideal.
-#![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+#![allow(
+    dead_code,
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing
+)]
 
 use rtcan::core::driver::{Controller, Mailbox, TxResult};
 use rtcan::core::engine::Engine;
@@ -79,8 +84,13 @@ impl<const RX: usize, const A: usize, const Q: usize> Station for Module<RX, A, 
         self.engine.on_rx(frame, sof, &mut self.can, &mut self.host);
     }
     fn on_tx_done(&mut self, mailbox: usize, result: TxResult, now: Nanos) {
-        self.engine
-            .on_tx_done(Mailbox(mailbox as u8), result, now, &mut self.can, &mut self.host);
+        self.engine.on_tx_done(
+            Mailbox(mailbox as u8),
+            result,
+            now,
+            &mut self.can,
+            &mut self.host,
+        );
     }
     fn next_wakeup(&self) -> Nanos {
         self.engine.next_wakeup()

@@ -3,12 +3,12 @@
 //! bit rate with the module's acceptance filters, the slot timer on TIM2.
 use rtcan_board_stm32f103::hal::afio::{self, AfioExt};
 use rtcan_board_stm32f103::hal::can::CanExt;
+use rtcan_board_stm32f103::hal::gpio::Floating;
 use rtcan_board_stm32f103::hal::gpio::{gpioa, gpiob, Cr, GpioExt};
 use rtcan_board_stm32f103::hal::pac;
 use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{self, Rcc};
 use rtcan_board_stm32f103::{can_btr, BxCan, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ};
-use rtcan_board_stm32f103::hal::gpio::Floating;
 
 use crate::robot::BUS;
 use crate::SYSCLK_HZ;

@@ -39,12 +39,22 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
 
     /// First run of the engine after start-up: arms the slot alarm.
     pub fn start(&mut self) {
-        glue::poll(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        glue::poll(
+            &mut self.timer,
+            &mut self.can,
+            &mut self.engine,
+            &mut self.host,
+        );
     }
 
     /// TIM2: slot boundaries, window ends, bus-off check.
     pub fn on_timer(&mut self) {
-        glue::on_timer(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        glue::on_timer(
+            &mut self.timer,
+            &mut self.can,
+            &mut self.engine,
+            &mut self.host,
+        );
         // A boundary frees queue room and may open a window: hand over what waits.
         if self.pump() {
             self.rearm();
@@ -85,6 +95,11 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
 
     /// The engine's next wake-up may have moved (a submit, a sync frame): re-arm.
     fn rearm(&mut self) {
-        glue::poll(&mut self.timer, &mut self.can, &mut self.engine, &mut self.host);
+        glue::poll(
+            &mut self.timer,
+            &mut self.can,
+            &mut self.engine,
+            &mut self.host,
+        );
     }
 }

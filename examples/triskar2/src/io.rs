@@ -3,12 +3,11 @@
 //! (TIM4), and ADC conversions (rangers, battery). Plain values in, plain values out;
 //! the node logic never sees a peripheral.
 use rtcan_board_stm32f103::hal::adc::Adc;
-use rtcan_board_stm32f103::hal::gpio::{Alternate, Analog, PushPull};
 use rtcan_board_stm32f103::hal::gpio::{gpioa, gpiob, Cr};
+use rtcan_board_stm32f103::hal::gpio::{Alternate, Analog, PushPull};
 use rtcan_board_stm32f103::hal::pac;
 use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{Enable, Rcc, Reset};
-
 
 /// PWM period in timer ticks: 72 MHz / 3600 = 20 kHz (above hearing, fine for DC motors).
 const PWM_TOP: u16 = 3600;
@@ -50,7 +49,8 @@ impl MotorIo {
         tim3.arr().write(|w| unsafe { w.bits(0xFFFF) });
         tim3.cr1().write(|w| unsafe { w.bits(1) });
         // TIM4: PWM mode 1 with preload on CH1 and CH2, outputs enabled, 20 kHz.
-        tim4.arr().write(|w| unsafe { w.bits(u32::from(PWM_TOP) - 1) });
+        tim4.arr()
+            .write(|w| unsafe { w.bits(u32::from(PWM_TOP) - 1) });
         tim4.ccmr1_output()
             .write(|w| unsafe { w.bits((0b110 << 4) | (1 << 3) | (0b110 << 12) | (1 << 11)) });
         tim4.ccr1().write(|w| unsafe { w.bits(0) });
@@ -72,7 +72,11 @@ impl MotorIo {
 
     /// Duty cycle -1..=1 (sign = direction); anything else (NaN included) stops.
     pub fn set_duty(&mut self, duty: f32) {
-        let d = if duty.is_finite() { duty.clamp(-1.0, 1.0) } else { 0.0 };
+        let d = if duty.is_finite() {
+            duty.clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
         // `as` saturates; |d| ≤ 1 keeps it within PWM_TOP.
         let ticks = (d.abs() * f32::from(PWM_TOP)) as u32;
         let (fwd, rev) = if d >= 0.0 { (ticks, 0) } else { (0, ticks) };

@@ -10,7 +10,7 @@ use rtic_monotonics::Monotonic;
 use triskar2_nodes as nodes;
 
 use crate::io::{sharp_distance_m, Analog4, MotorIo};
-use crate::robot::types::{Battery, Encoder, LogLine, Odometry, Proximity, Twist, WheelSpeeds};
+use crate::robot::{Battery, Encoder, LogLine, Odometry, Proximity, Twist, WheelSpeeds};
 use crate::Mono;
 
 /// Encoder counts per wheel revolution: 512-line encoder × 4 (quadrature) × 19:1 gear.
@@ -199,10 +199,7 @@ pub async fn odometry<
         ticker.tick().await;
         let t = now();
         let (e1, e2, e3) = &encoders;
-        for (w, e) in wheels
-            .iter_mut()
-            .zip([latest(e1), latest(e2), latest(e3)])
-        {
+        for (w, e) in wheels.iter_mut().zip([latest(e1), latest(e2), latest(e3)]) {
             if let Some((e, _)) = e {
                 *w = e.speed;
             }
@@ -332,12 +329,16 @@ pub async fn battery_monitor<
         ticker.tick().await;
         let t = now();
         let [v, i, ..] = adc.read_volts();
-        let s = monitor.step(t, v * BATTERY_DIVIDER, (i - CURRENT_ZERO_V) / CURRENT_V_PER_A);
+        let s = monitor.step(
+            t,
+            v * BATTERY_DIVIDER,
+            (i - CURRENT_ZERO_V) / CURRENT_V_PER_A,
+        );
         if !node_runs(node, status) {
             continue;
         }
         n = n.wrapping_add(1);
-        if n % 10 == 0 {
+        if n.is_multiple_of(10) {
             // NRT: refused while the engine queue is full; the next second retries.
             let _ = battery.send(
                 Battery {
@@ -351,9 +352,17 @@ pub async fn battery_monitor<
         if s.low != low {
             low = s.low;
             let line = if low {
-                LogLine { level: 2, code: 1, text: text("battery low") }
+                LogLine {
+                    level: 2,
+                    code: 1,
+                    text: text("battery low"),
+                }
             } else {
-                LogLine { level: 1, code: 2, text: text("battery ok") }
+                LogLine {
+                    level: 1,
+                    code: 2,
+                    text: text("battery ok"),
+                }
             };
             let _ = log.send(line, t);
         }
@@ -420,15 +429,14 @@ pub async fn ros_bridge<
     }
 }
 
-/// Every module's lowest-priority housekeeping (100 Hz): ages the master's heartbeat
-/// once per bus cycle (the safe-state rule's clock) and logs the safe-state reason
-/// when it changes.
+/// Every module's lowest-priority housekeeping (100 Hz): logs the safe-state reason
+/// when it changes. (The master's heartbeat is aged by the engine's `CycleStart`
+/// event through `ModuleHost`, on the bus clock.)
 pub async fn supervisor(status: &SystemStatus) -> ! {
     let mut ticker = Ticker::every_ms(10);
     let mut last = None;
     loop {
         ticker.tick().await;
-        status.on_cycle();
         let reason = status.safe_reason();
         if reason != last {
             match reason {

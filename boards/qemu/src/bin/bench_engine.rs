@@ -29,7 +29,9 @@ const BUS: BusConfig = BusConfig {
     slot_ns: SLOT_NS,
     hyperperiod_cycles: 1,
     cycle_counter_wrap: 1 << 15,
-    laxity: LaxityEncoding::Linear { unit_ns: SLOT_NS as u32 },
+    laxity: LaxityEncoding::Linear {
+        unit_ns: SLOT_NS as u32,
+    },
     guard_ns: 2_000,
     fingerprint: 0x1234_5678,
 };
@@ -37,35 +39,132 @@ const BUS: BusConfig = BusConfig {
 const MASKS: [u64; 1] = [0x038E_38FF_8E38_FFFF];
 /// Node A of the paper: H_A every 6 slots from 1, H_B every 30 from 4, H_C at 10.
 const TX: [TxTopic; 5] = [
-    TxTopic { msg_id: MsgId(0x140), class: Class::Hrt, size: 8, deadline_ns: 0 },
-    TxTopic { msg_id: MsgId(0x141), class: Class::Hrt, size: 8, deadline_ns: 0 },
-    TxTopic { msg_id: MsgId(0x142), class: Class::Hrt, size: 8, deadline_ns: 0 },
-    TxTopic { msg_id: MsgId(0x143), class: Class::Srt, size: 8, deadline_ns: 10_000_000 },
-    TxTopic { msg_id: MsgId(0x144), class: Class::Srt, size: 20, deadline_ns: 10_000_000 },
+    TxTopic {
+        msg_id: MsgId(0x140),
+        class: Class::Hrt,
+        size: 8,
+        deadline_ns: 0,
+    },
+    TxTopic {
+        msg_id: MsgId(0x141),
+        class: Class::Hrt,
+        size: 8,
+        deadline_ns: 0,
+    },
+    TxTopic {
+        msg_id: MsgId(0x142),
+        class: Class::Hrt,
+        size: 8,
+        deadline_ns: 0,
+    },
+    TxTopic {
+        msg_id: MsgId(0x143),
+        class: Class::Srt,
+        size: 8,
+        deadline_ns: 10_000_000,
+    },
+    TxTopic {
+        msg_id: MsgId(0x144),
+        class: Class::Srt,
+        size: 20,
+        deadline_ns: 10_000_000,
+    },
 ];
 const CAL: [CalEntry; 13] = [
-    CalEntry { slot: 1, tx: 0, fragment: 0 },
-    CalEntry { slot: 4, tx: 1, fragment: 0 },
-    CalEntry { slot: 7, tx: 0, fragment: 0 },
-    CalEntry { slot: 10, tx: 2, fragment: 0 },
-    CalEntry { slot: 13, tx: 0, fragment: 0 },
-    CalEntry { slot: 19, tx: 0, fragment: 0 },
-    CalEntry { slot: 25, tx: 0, fragment: 0 },
-    CalEntry { slot: 31, tx: 0, fragment: 0 },
-    CalEntry { slot: 34, tx: 1, fragment: 0 },
-    CalEntry { slot: 37, tx: 0, fragment: 0 },
-    CalEntry { slot: 43, tx: 0, fragment: 0 },
-    CalEntry { slot: 49, tx: 0, fragment: 0 },
-    CalEntry { slot: 55, tx: 0, fragment: 0 },
+    CalEntry {
+        slot: 1,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 4,
+        tx: 1,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 7,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 10,
+        tx: 2,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 13,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 19,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 25,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 31,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 34,
+        tx: 1,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 37,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 43,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 49,
+        tx: 0,
+        fragment: 0,
+    },
+    CalEntry {
+        slot: 55,
+        tx: 0,
+        fragment: 0,
+    },
 ];
 const RX: [RxTopic; 2] = [
-    RxTopic { msg_id: MsgId(0x150), size: 8, arena_offset: 0 },
-    RxTopic { msg_id: MsgId(0x151), size: 20, arena_offset: 8 },
+    RxTopic {
+        msg_id: MsgId(0x150),
+        size: 8,
+        arena_offset: 0,
+    },
+    RxTopic {
+        msg_id: MsgId(0x151),
+        size: 20,
+        arena_offset: 8,
+    },
 ];
-const MASTER: NodeTables<'static> =
-    NodeTables { bus: BUS, module: 0, tx: &TX, rx: &[], calendar: &CAL, master_masks: &MASKS };
-const SLAVE: NodeTables<'static> =
-    NodeTables { bus: BUS, module: 1, tx: &[], rx: &RX, calendar: &[], master_masks: &[] };
+const MASTER: NodeTables<'static> = NodeTables {
+    bus: BUS,
+    module: 0,
+    tx: &TX,
+    rx: &[],
+    calendar: &CAL,
+    master_masks: &MASKS,
+};
+const SLAVE: NodeTables<'static> = NodeTables {
+    bus: BUS,
+    module: 1,
+    tx: &[],
+    rx: &RX,
+    calendar: &[],
+    master_masks: &[],
+};
 
 /// Records loads; completions are fed back by the benchmark loop.
 struct Can {
@@ -109,17 +208,33 @@ impl Host for Bench {
 }
 
 fn report(name: &str, s: &Stat) {
-    hprintln!("BENCH {} max {} mean {} samples {}", name, s.max, s.mean(), s.n);
+    hprintln!(
+        "BENCH {} max {} mean {} samples {}",
+        name,
+        s.max,
+        s.mean(),
+        s.n
+    );
 }
 
 #[entry]
 fn main() -> ! {
-    let Some(cp) = cortex_m::Peripherals::take() else { rtcan_board_qemu::fail() };
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        rtcan_board_qemu::fail()
+    };
     let mut meter = SysTickMeter::new(cp.SYST);
-    let mut host = Bench { hrt: [1; 8], srt8: [2; 8], srt20: [3; 20], delivered: 0 };
+    let mut host = Bench {
+        hrt: [1; 8],
+        srt8: [2; 8],
+        srt20: [3; 20],
+        delivered: 0,
+    };
 
     // --- Master: every slot boundary of 3 cycles, classified by what it did. ---
-    let mut can = Can { loaded: [None; 3], loads: 0 };
+    let mut can = Can {
+        loaded: [None; 3],
+        loads: 0,
+    };
     let mut m = Engine::<'static, 1, 8, 8>::new(MASTER, 0);
     let (mut idle, mut free_idle, mut hrt, mut window, mut sync, mut done) = (
         Stat::default(),
@@ -143,7 +258,13 @@ fn main() -> ! {
         });
         let loaded = can.loads - before;
         if n > 1000 {
-            hprintln!("DEBUG boundary {} slot {} loaded {} n {}", boundary, slot, loaded, n);
+            hprintln!(
+                "DEBUG boundary {} slot {} loaded {} n {}",
+                boundary,
+                slot,
+                loaded,
+                n
+            );
         }
         match (slot, loaded) {
             (0, _) => sync.add(n),
@@ -162,7 +283,11 @@ fn main() -> ! {
             }
         }
     }
-    check!(m.counters().tx_frames >= 75, "frames sent {}", m.counters().tx_frames);
+    check!(
+        m.counters().tx_frames >= 75,
+        "frames sent {}",
+        m.counters().tx_frames
+    );
     report("slot_boundary_other_module", &idle);
     report("slot_boundary_free_nothing_queued", &free_idle);
     report("slot_boundary_sync_master", &sync);
@@ -172,14 +297,27 @@ fn main() -> ! {
 
     // --- Slave receive path. ---
     let mut s = Engine::<'static, 2, 32, 8>::new(SLAVE, 5_000);
-    let mut scan = Can { loaded: [None; 3], loads: 0 };
-    let (mut rx1, mut rx_mid, mut rx_last, mut rx_sync) =
-        (Stat::default(), Stat::default(), Stat::default(), Stat::default());
+    let mut scan = Can {
+        loaded: [None; 3],
+        loads: 0,
+    };
+    let (mut rx1, mut rx_mid, mut rx_last, mut rx_sync) = (
+        Stat::default(),
+        Stat::default(),
+        Stat::default(),
+        Stat::default(),
+    );
     let payload20 = [0xA5u8; 20];
     let crc = crc16(&payload20);
     let mut t = 10_000u64;
     for cycle in 0..20u16 {
-        let sf = sync_frame(Sync { cycle, mask: MASKS[0] }, 60);
+        let sf = sync_frame(
+            Sync {
+                cycle,
+                mask: MASKS[0],
+            },
+            60,
+        );
         rx_sync.add(meter.instructions(&mut || s.on_rx(&sf, t, &mut scan, &mut host)));
         let Some(f) = CanId::new(0, MsgId(0x150), 0).and_then(|id| Frame::new(id, &[7; 8])) else {
             rtcan_board_qemu::fail()
@@ -188,7 +326,8 @@ fn main() -> ! {
         for counter in (0..3u8).rev() {
             let mut data = [0u8; 8];
             let dlc = fragment_data(&payload20, crc, counter, &mut data);
-            let Some(f) = CanId::new(9, MsgId(0x151), counter).and_then(|id| Frame::from_parts(id, dlc, data))
+            let Some(f) = CanId::new(9, MsgId(0x151), counter)
+                .and_then(|id| Frame::from_parts(id, dlc, data))
             else {
                 rtcan_board_qemu::fail()
             };
@@ -201,7 +340,11 @@ fn main() -> ! {
         }
         t += 60 * SLOT_NS;
     }
-    check!(host.delivered == 20 * 28, "delivered {} bytes", host.delivered);
+    check!(
+        host.delivered == 20 * 28,
+        "delivered {} bytes",
+        host.delivered
+    );
     check!(s.is_synced(), "slave synced");
     report("rx_single_frame_topic", &rx1);
     report("rx_fragment_middle", &rx_mid);

@@ -215,8 +215,9 @@ mod tests {
     fn encodes_known_bytes() {
         let mut out = [0u8; 16];
         let n = encode(0x48, &[1, 2, 3], &mut out).unwrap();
-        // Fletcher-16 over 48 03 01 02 03: a = 0x4F, b = 0x48+0x4B+0x4C+0x4E+0x51 mod 255.
-        assert_eq!(&out[..n], &[0xA5, 0x5A, 0x48, 3, 1, 2, 3, 0x4F, 0x80]);
+        // Fletcher-16 over 48 03 01 02 03: running sums a = 48 4B 4C 4E 51, so a = 0x51
+        // and b = (0x48 + 0x4B + 0x4C + 0x4E + 0x51) mod 255 = 0x7F.
+        assert_eq!(&out[..n], &[0xA5, 0x5A, 0x48, 3, 1, 2, 3, 0x51, 0x7F]);
     }
 
     #[test]

@@ -43,11 +43,13 @@ mod app {
         fw::Mono::start(cx.core.SYST, fw::SYSCLK_HZ);
         let (pa9, pa10) = b.pins.usart1;
         let tx_pin = pa9.into_alternate_push_pull(&mut b.pins.a_crh);
-        let serial = b.usart1.serial::<_, rtcan_board_stm32f103::hal::gpio::Floating>(
-            (tx_pin, pa10),
-            Config::default().baudrate(115_200.bps()),
-            &mut b.rcc,
-        );
+        let serial = b
+            .usart1
+            .serial::<_, rtcan_board_stm32f103::hal::gpio::Floating>(
+                (tx_pin, pa10),
+                Config::default().baudrate(115_200.bps()),
+                &mut b.rcc,
+            );
         let (link_tx, mut link_rx) = serial.split();
         link_rx.listen();
         let mut drv = Driver {
