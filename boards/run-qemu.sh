@@ -9,7 +9,7 @@ export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$PWD/target}"
 QEMU=(qemu-system-arm -cpu cortex-m3 -machine lm3s6965evb -nographic
       -semihosting-config enable=on,target=native)
 TESTS=(bus_exchange)
-BENCHES=(bench pubsub_bench)
+BENCHES=(bench bench_engine pubsub_bench)
 
 cargo build --release -p rtcan-board-qemu --bins
 bin="$CARGO_TARGET_DIR/thumbv7m-none-eabi/release"

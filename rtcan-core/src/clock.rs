@@ -4,8 +4,10 @@
 //! Bus time is nanoseconds since slot 0 of absolute cycle 0. A slave keeps an anchor
 //! (local SOF time of the last sync, and that sync's bus time `abs_cycle · cycle_ns`)
 //! and a rate `local ns per bus ns = 1 + ppb / 10⁹`, measured between consecutive syncs
-//! received. Integer math only (i128 for the products): no overflow for any drift the
-//! plausibility check lets through and gaps of millions of cycles.
+//! received. Integer math in 64 bits only (`mul_div` splits products so they cannot
+//! overflow; 128-bit division is a long software routine on Cortex-M3 and its code
+//! alone was 1.4 KiB of a 32 KiB image). Gaps between syncs longer than `MAX_GAP_NS`
+//! relock instead of extrapolating.
 //!
 //! The 2014 C code measured the slot length once at start-up and then only reset the
 //! phase at each sync (original-rtcan-code.md §2–3): drift was never corrected within a
@@ -16,7 +18,10 @@ use crate::tables::BusConfig;
 use crate::time::Nanos;
 
 /// Parts per billion in one.
-const PPB: i128 = 1_000_000_000;
+const PPB: i64 = 1_000_000_000;
+/// Longest gap between two syncs bridged with the measured rate (8.5 s, hundreds of
+/// cycles); after a longer silence the slave relocks from scratch.
+pub const MAX_GAP_NS: i64 = 1 << 33;
 /// Largest rate error believed (1 %, twice the ±5000 ppm crystals are specified for);
 /// a larger measurement means the master restarted or the counter jumped: relock.
 pub const MAX_RATE_PPB: i64 = 10_000_000;
@@ -82,20 +87,21 @@ impl SlotClock {
             self.lock(sof, counter);
             return true;
         }
-        let d_local = i128::from(sof) - i128::from(self.anchor_local);
-        if d_local <= 0 {
-            // Time went backwards or a duplicate timestamp: start over from this sync.
+        let d_local = nanos_i64(sof) - nanos_i64(self.anchor_local);
+        if d_local <= 0 || d_local > MAX_GAP_NS {
+            // Time went backwards, a duplicate timestamp, or a gap too long to bridge:
+            // start over from this sync.
             self.lock(sof, counter);
             return true;
         }
         // Cycles elapsed by the local clock (current rate), then the value congruent to
         // the counter difference nearest to it: unwraps the counter across any gap the
         // local estimate is good to within ±wrap/2 cycles.
-        let cyc = i128::from(self.cycle_ns);
-        let est_bus = div_round(d_local * PPB, PPB + i128::from(self.ppb));
+        let cyc = nanos_i64(self.cycle_ns).max(1);
+        let est_bus = mul_div(d_local, PPB, PPB + self.ppb);
         let n_est = div_round(est_bus, cyc);
-        let wrap = i128::from(self.wrap);
-        let diff = i128::from(counter) - i128::from(self.counter);
+        let wrap = i64::from(self.wrap);
+        let diff = i64::from(counter) - i64::from(self.counter);
         let mut r = (diff - n_est).rem_euclid(wrap);
         if r > wrap / 2 {
             r -= wrap;
@@ -109,13 +115,18 @@ impl SlotClock {
             self.lock(sof, counter);
             return true;
         }
-        let d_bus = d_cycles * cyc;
-        let measured = div_round((d_local - d_bus) * PPB, d_bus);
-        if measured.abs() > i128::from(MAX_RATE_PPB) {
+        let d_bus = d_cycles.saturating_mul(cyc);
+        let err = d_local - d_bus;
+        // Plausibility first (|err| <= 1 % of d_bus), which also bounds err * PPB.
+        if err.unsigned_abs() > d_bus.unsigned_abs() / 100 {
             self.lock(sof, counter);
             return true;
         }
-        let measured = measured as i64; // |measured| <= MAX_RATE_PPB
+        let measured = div_round(err * PPB, d_bus);
+        if measured.abs() > MAX_RATE_PPB {
+            self.lock(sof, counter);
+            return true;
+        }
         self.ppb = if self.rate_valid {
             // Light low-pass: SOF timestamps jitter; a real drift change still settles
             // within a few cycles.
@@ -177,15 +188,15 @@ impl SlotClock {
     /// Bus time (ns since slot 0 of absolute cycle 0) at local time `local`; saturates
     /// at 0 before bus time 0. Before lock a slave returns `local` unchanged.
     pub fn to_bus(&self, local: Nanos) -> Nanos {
-        let d_local = i128::from(local) - i128::from(self.anchor_local);
-        let d_bus = div_round(d_local * PPB, PPB + i128::from(self.ppb));
-        clamp_nanos(i128::from(self.anchor_bus) + d_bus)
+        let d_local = nanos_i64(local) - nanos_i64(self.anchor_local);
+        let d_bus = mul_div(d_local, PPB, PPB + self.ppb);
+        clamp_nanos(nanos_i64(self.anchor_bus).saturating_add(d_bus))
     }
     /// Local time at which bus time `bus` occurs (within 1 ns, the inverse of `to_bus`).
     pub fn to_local(&self, bus: Nanos) -> Nanos {
-        let d_bus = i128::from(bus) - i128::from(self.anchor_bus);
-        let d_local = div_round(d_bus * (PPB + i128::from(self.ppb)), PPB);
-        clamp_nanos(i128::from(self.anchor_local) + d_local)
+        let d_bus = nanos_i64(bus) - nanos_i64(self.anchor_bus);
+        let d_local = mul_div(d_bus, PPB + self.ppb, PPB);
+        clamp_nanos(nanos_i64(self.anchor_local).saturating_add(d_local))
     }
 
     fn lock(&mut self, sof: Nanos, counter: u32) {
@@ -200,19 +211,28 @@ impl SlotClock {
 }
 
 /// `a / b` rounded to nearest (ties up), for `b > 0`.
-fn div_round(a: i128, b: i128) -> i128 {
+fn div_round(a: i64, b: i64) -> i64 {
     if b <= 0 {
         return a;
     }
-    let (n, d) = (2 * a + b, 2 * b);
-    // 64-bit fast path (every case but gaps of seconds): a 128-bit division is a long
-    // software routine on Cortex-M3, and this runs in the RX interrupt of each sync.
-    match (i64::try_from(n), i64::try_from(d)) {
-        (Ok(n), Ok(d)) => i128::from(n.div_euclid(d)),
-        _ => n.div_euclid(d),
-    }
+    (a.saturating_mul(2).saturating_add(b)).div_euclid(b.saturating_mul(2))
 }
 
-fn clamp_nanos(v: i128) -> Nanos {
-    Nanos::try_from(v.max(0)).unwrap_or(Nanos::MAX)
+/// `a * num / den` rounded, without overflow for `0 < den < 2^31` and `|num| < 2^31`:
+/// `a = q * den + r` gives `q * num + r * num / den` with `|r * num| < 2^62`.
+fn mul_div(a: i64, num: i64, den: i64) -> i64 {
+    if den <= 0 {
+        return a;
+    }
+    let (q, r) = (a.div_euclid(den), a.rem_euclid(den));
+    q.saturating_mul(num).saturating_add(div_round(r * num, den))
+}
+
+/// Nanoseconds as i64 (saturating: u64 times past 2^63 ns are 292 years away).
+fn nanos_i64(t: Nanos) -> i64 {
+    i64::try_from(t).unwrap_or(i64::MAX)
+}
+
+fn clamp_nanos(v: i64) -> Nanos {
+    Nanos::try_from(v.max(0)).unwrap_or(0)
 }

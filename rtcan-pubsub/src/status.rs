@@ -159,6 +159,23 @@ impl SystemStatus {
         self.with(|st| st.sync_losses)
     }
 
+    /// Forgets everything heard (as after power-on): not synced, master not heard, no
+    /// module states, no mismatch, no sync losses. For restarting a simulated module.
+    pub fn clear(&self) {
+        self.with(|st| {
+            *st = StatusState {
+                synced: false,
+                master_heard: false,
+                master_age: 0,
+                master_state: 0,
+                mismatch: None,
+                heard: 0,
+                states: [0; 64],
+                sync_losses: 0,
+            }
+        });
+    }
+
     /// Clears the latched fingerprint mismatch (after the operator fixed the robot).
     pub fn reset(&self) {
         self.with(|st| st.mismatch = None);

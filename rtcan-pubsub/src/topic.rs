@@ -277,6 +277,39 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     }
 
     /// Free pool blocks now.
+    /// Back to the state of `new`, as far as the topic itself is concerned: drops the
+    /// references held by the subscriber queues and the bus side (latched HRT sample,
+    /// blocks waiting for or held by an engine), clears counters, flags, wakers and
+    /// receive times. Blocks still held by a live `Msg` or `Loan` stay allocated until
+    /// that handle drops, so this is safe at any time; it is meant for restarting a
+    /// module (the simulator runs several robots one after another in one process).
+    /// The engine that held bus-side blocks must be discarded with it.
+    pub fn reset(&self) {
+        self.with(|st| {
+            for sub in st.subs.iter_mut() {
+                while let Some(idx) = sub.ring.pop() {
+                    st.pool.unref(idx);
+                }
+                *sub = SubState::EMPTY;
+            }
+            let held = st.remote.held;
+            for idx in 0..32u8 {
+                if held & bit(idx) != 0 {
+                    st.pool.unref(idx);
+                }
+            }
+            st.remote = RemoteState {
+                held: 0,
+                latest: NONE,
+                pending: Ring::EMPTY,
+                nothing_flag: false,
+                miss_flag: false,
+            };
+            st.pool.waker = None;
+            st.stats = TopicStats::default();
+        });
+    }
+
     pub fn free_blocks(&self) -> usize {
         self.with(|st| st.pool.free_count())
     }

@@ -463,3 +463,18 @@ impl<const N: usize> DeliverForTest for Topic<Encoder, N, 1, 2> {
         rtcan_pubsub::RxPort::deliver(self, &b, sof);
     }
 }
+
+#[test]
+fn clear_forgets_sync_heartbeats_and_mismatch() {
+    let s = status();
+    running(&s);
+    assert!(!s.safe_state_required());
+    s.event(Event::FingerprintMismatch {
+        module: 4,
+        fingerprint: 9,
+    });
+    s.clear();
+    assert_eq!(s.safe_reason(), Some(rtcan_pubsub::SafeReason::NoSync));
+    assert_eq!(s.module_state(0), None);
+    assert_eq!(s.sync_losses(), 0);
+}

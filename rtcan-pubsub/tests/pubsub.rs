@@ -362,3 +362,28 @@ fn nrt_engine_round_trip_returns_blocks() {
     }
     assert_eq!(t.free_blocks(), 10);
 }
+
+#[test]
+fn reset_returns_every_topic_held_block_but_not_live_handles() {
+    // 2 subscribers (queue 2), SRT remote: blocks sit in both queues and the bus side.
+    let t = Topic::<u32, 8, 2, 2>::new(Remote::Srt, None);
+    let p = t.publisher();
+    p.send(1, 10).unwrap();
+    p.send(2, 20).unwrap();
+    let held = t.subscriber::<0>().try_recv().unwrap(); // a live handle on block of `1`
+    let engine_tok = t.pending().unwrap();
+    t.pending_done(engine_tok, true); // block of `1` now held by "the engine" too
+    assert!(t.free_blocks() < 8);
+    t.reset();
+    assert_eq!(*held, 1, "a live handle still reads its block");
+    assert_eq!(t.free_blocks(), 7, "only the handle's block stays allocated");
+    assert_eq!(t.stats(), Default::default());
+    assert_eq!(t.pending(), None);
+    assert!(t.subscriber::<1>().try_recv().is_none());
+    assert_eq!(t.subscriber::<0>().last_rx_time(), None);
+    // A stale engine completion after the reset must not free anything twice.
+    t.tx_done(Some(engine_tok), TxOutcome::Sent);
+    assert_eq!(t.free_blocks(), 7);
+    drop(held);
+    assert_eq!(t.free_blocks(), 8);
+}

@@ -36,7 +36,8 @@ const BUS: BusConfig = BusConfig {
     fingerprint: 0x1234_5678,
 };
 /// The RTCAN paper's benchmark mask (Fig. 3): 40 of 60 slots reserved.
-const MASKS: [u64; 1] = [0x038E_38FF_8E38_FFFF];
+const MASK: u64 = 0x038E_38FF_8E38_FFFF;
+const MASKS: [u64; 1] = [MASK];
 /// Node A of the paper: H_A every 6 slots from 1, H_B every 30 from 4, H_C at 10.
 const TX: [TxTopic; 5] = [
     TxTopic {
@@ -268,14 +269,14 @@ fn main() -> ! {
         }
         match (slot, loaded) {
             (0, _) => sync.add(n),
-            (_, 0) if MASKS[0] >> slot & 1 == 1 => idle.add(n),
+            (_, 0) if MASK >> slot & 1 == 1 => idle.add(n),
             (_, 0) => free_idle.add(n),
-            _ if MASKS[0] >> slot & 1 == 1 => hrt.add(n),
+            _ if MASK >> slot & 1 == 1 => hrt.add(n),
             _ => window.add(n),
         }
         // Everything loaded is sent before the next boundary.
         for i in 0..3u8 {
-            if can.loaded[i as usize].take().is_some() {
+            if can.loaded.get_mut(i as usize).and_then(Option::take).is_some() {
                 let n = meter.instructions(&mut || {
                     m.on_tx_done(Mailbox(i), TxResult::Sent, now, &mut can, &mut host);
                 });
@@ -314,7 +315,7 @@ fn main() -> ! {
         let sf = sync_frame(
             Sync {
                 cycle,
-                mask: MASKS[0],
+                mask: MASK,
             },
             60,
         );

@@ -38,6 +38,7 @@ pub mod odometry;
 pub mod pid;
 pub mod proximity;
 mod step_clock;
+pub mod trig;
 
 pub use battery::{BatteryConfig, BatteryNode, BatteryStatus};
 pub use encoder::EncoderSpeed;

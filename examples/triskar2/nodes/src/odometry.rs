@@ -71,7 +71,7 @@ impl OdometryNode {
             };
         }
         let mid = self.pose.theta + 0.5 * twist.wz * dt;
-        let (s, c) = (libm::sinf(mid), libm::cosf(mid));
+        let (s, c) = crate::trig::sin_cos(mid);
         self.pose.x += (c * twist.vx - s * twist.vy) * dt;
         self.pose.y += (s * twist.vx + c * twist.vy) * dt;
         self.pose.theta = wrap_angle(self.pose.theta + twist.wz * dt);
