@@ -1,0 +1,124 @@
+//! One struct per Triskar2 module: it owns the module's node objects and runs them on the
+//! module's generated topics (`rtcan::robot_toml::<module>`), with the hardware behind a
+//! small trait. The firmware images (HAL drivers) and `rtcan-sim` (plant models)
+//! implement the traits and call the same code.
+//!
+//! Every app has `poll(now, hw) -> Nanos`: it runs the periodic node steps that are due
+//! at `now` (rates as robot.toml declares them), drains the event-driven subscriptions,
+//! and returns the local time at which it next needs to run. A firmware image may
+//! instead call the per-node step functions from its own tasks.
+//!
+//! Lifecycle (R2P §3.4.2): a node starts (Init → Run) once the module's `STATUS` allows
+//! it (synchronised and the master heard) and stops when the safe state is required; it
+//! does not restart by itself. A stopped motor controller drives 0 duty.
+
+pub mod gateway;
+pub mod motor;
+pub mod proximity;
+pub mod psu;
+
+pub use gateway::{GatewayApp, GatewayHw};
+pub use motor::{Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw, COUNTS_PER_WHEEL_REV};
+pub use proximity::{ProximityApp, ProximityHw};
+pub use psu::{PsuApp, PsuHw};
+
+use crate::kinematics::Twist;
+use crate::Nanos;
+use rtcan::pubsub::{Node, NodeState, SystemStatus};
+use rtcan::robot_toml as msg;
+
+/// Milliseconds in nanoseconds.
+pub const MS: Nanos = 1_000_000;
+
+/// A periodic task's schedule on the module's local clock. The first call is due at
+/// once; a late call does not try to catch up with the periods it missed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Every {
+    period: Nanos,
+    next: Option<Nanos>,
+}
+
+impl Every {
+    pub const fn new(period: Nanos) -> Self {
+        Self { period, next: None }
+    }
+
+    /// Whether the task is due at `now` (and if so, schedules the next run).
+    pub fn due(&mut self, now: Nanos) -> bool {
+        let next = match self.next {
+            None => now,
+            Some(n) if now >= n => n,
+            Some(_) => return false,
+        };
+        let mut following = next.saturating_add(self.period);
+        if following <= now {
+            following = now.saturating_add(self.period);
+        }
+        self.next = Some(following);
+        true
+    }
+
+    /// When the task is next due (`0`: at the first poll).
+    pub fn next(&self) -> Nanos {
+        self.next.unwrap_or(0)
+    }
+}
+
+/// Applies the lifecycle rule to `node` and tells whether it may act: starts it from
+/// Init when the system allows, stops it when the safe state is required.
+pub fn run_node(node: &Node, status: &SystemStatus) -> bool {
+    if node.state() == NodeState::Init {
+        let _ = node.start(status);
+    }
+    node.run(status)
+}
+
+pub(crate) fn twist_from_msg(t: &msg::Twist) -> Twist {
+    Twist {
+        vx: t.vx,
+        vy: t.vy,
+        wz: t.wz,
+    }
+}
+
+pub(crate) fn twist_to_msg(t: Twist) -> msg::Twist {
+    msg::Twist {
+        vx: t.vx,
+        vy: t.vy,
+        wz: t.wz,
+    }
+}
+
+/// Publications a module could not make (pool exhausted, queue full): they are counted,
+/// never fatal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AppStats {
+    pub published: u32,
+    pub publish_errors: u32,
+}
+
+impl AppStats {
+    pub(crate) fn count<E>(&mut self, r: Result<(), E>) {
+        match r {
+            Ok(()) => self.published = self.published.wrapping_add(1),
+            Err(_) => self.publish_errors = self.publish_errors.wrapping_add(1),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_is_due_at_once_then_each_period_without_catch_up() {
+        let mut e = Every::new(10);
+        assert!(e.due(3));
+        assert_eq!(e.next(), 13);
+        assert!(!e.due(12));
+        assert!(e.due(14));
+        assert_eq!(e.next(), 23, "keeps the phase of the first run");
+        assert!(e.due(100));
+        assert_eq!(e.next(), 110, "far behind: restarts from now");
+    }
+}
