@@ -225,7 +225,8 @@ fn mul_div(a: i64, num: i64, den: i64) -> i64 {
         return a;
     }
     let (q, r) = (a.div_euclid(den), a.rem_euclid(den));
-    q.saturating_mul(num).saturating_add(div_round(r * num, den))
+    q.saturating_mul(num)
+        .saturating_add(div_round(r * num, den))
 }
 
 /// Nanoseconds as i64 (saturating: u64 times past 2^63 ns are 292 years away).

@@ -376,7 +376,11 @@ fn reset_returns_every_topic_held_block_but_not_live_handles() {
     assert!(t.free_blocks() < 8);
     t.reset();
     assert_eq!(*held, 1, "a live handle still reads its block");
-    assert_eq!(t.free_blocks(), 7, "only the handle's block stays allocated");
+    assert_eq!(
+        t.free_blocks(),
+        7,
+        "only the handle's block stays allocated"
+    );
     assert_eq!(t.stats(), Default::default());
     assert_eq!(t.pending(), None);
     assert!(t.subscriber::<1>().try_recv().is_none());

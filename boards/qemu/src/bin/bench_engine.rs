@@ -276,7 +276,12 @@ fn main() -> ! {
         }
         // Everything loaded is sent before the next boundary.
         for i in 0..3u8 {
-            if can.loaded.get_mut(i as usize).and_then(Option::take).is_some() {
+            if can
+                .loaded
+                .get_mut(i as usize)
+                .and_then(Option::take)
+                .is_some()
+            {
                 let n = meter.instructions(&mut || {
                     m.on_tx_done(Mailbox(i), TxResult::Sent, now, &mut can, &mut host);
                 });
@@ -312,13 +317,7 @@ fn main() -> ! {
     let crc = crc16(&payload20);
     let mut t = 10_000u64;
     for cycle in 0..20u16 {
-        let sf = sync_frame(
-            Sync {
-                cycle,
-                mask: MASK,
-            },
-            60,
-        );
+        let sf = sync_frame(Sync { cycle, mask: MASK }, 60);
         rx_sync.add(meter.instructions(&mut || s.on_rx(&sf, t, &mut scan, &mut host)));
         let Some(f) = CanId::new(0, MsgId(0x150), 0).and_then(|id| Frame::new(id, &[7; 8])) else {
             rtcan_board_qemu::fail()

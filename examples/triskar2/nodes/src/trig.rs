@@ -10,7 +10,11 @@ use core::f32::consts::FRAC_PI_2;
 pub fn sin_cos(x: f32) -> (f32, f32) {
     // Nearest multiple of π/2, then r in [-π/4, π/4].
     let k = x * core::f32::consts::FRAC_2_PI;
-    let q = if k >= 0.0 { (k + 0.5) as i32 } else { (k - 0.5) as i32 };
+    let q = if k >= 0.0 {
+        (k + 0.5) as i32
+    } else {
+        (k - 0.5) as i32
+    };
     let r = x - q as f32 * FRAC_PI_2;
     let r2 = r * r;
     let s = r * (1.0 - r2 / 6.0 * (1.0 - r2 / 20.0 * (1.0 - r2 / 42.0)));
@@ -41,9 +45,16 @@ mod tests {
 
     #[test]
     fn exact_at_quadrant_points() {
-        for (x, s, c) in [(0.0f32, 0.0f32, 1.0f32), (FRAC_PI_2, 1.0, 0.0), (-FRAC_PI_2, -1.0, 0.0)] {
+        for (x, s, c) in [
+            (0.0f32, 0.0f32, 1.0f32),
+            (FRAC_PI_2, 1.0, 0.0),
+            (-FRAC_PI_2, -1.0, 0.0),
+        ] {
             let (ss, cc) = sin_cos(x);
-            assert!((ss - s).abs() < 1e-6 && (cc - c).abs() < 1e-6, "{x}: {ss} {cc}");
+            assert!(
+                (ss - s).abs() < 1e-6 && (cc - c).abs() < 1e-6,
+                "{x}: {ss} {cc}"
+            );
         }
     }
 }

@@ -106,6 +106,19 @@ impl AppStats {
     }
 }
 
+/// Returns a module's statics to their power-on state: its topics (queues, bus side,
+/// counters), its `STATUS` and its nodes (Init). Call it only while no engine of the
+/// module runs (the simulator, between two runs in one process).
+pub(crate) fn reset_statics(status: &SystemStatus, nodes: &[&Node], topics: &[&dyn Fn()]) {
+    for t in topics {
+        t();
+    }
+    status.clear();
+    for n in nodes {
+        n.reset();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -36,7 +36,7 @@ pub struct MotorCtrl {
 }
 
 impl MotorCtrl {
-    /// Controller of wheel `index` (0..3).
+    /// Controller of wheel `index` (0..3), 200 Hz.
     pub const fn new(index: usize) -> Self {
         Self {
             index,
@@ -45,7 +45,299 @@ impl MotorCtrl {
             speed_rad_s: 0.0,
             every: Every::new(5 * MS),
             last: None,
-            pub_stats_init(),
+            stats: AppStats {
+                published: 0,
+                publish_errors: 0,
+            },
         }
     }
+
+    /// The last step's output (`None` before the first step).
+    pub const fn output(&self) -> Option<MotorOutput> {
+        self.last
+    }
+
+    /// Measured wheel speed, rad/s.
+    pub const fn speed_rad_s(&self) -> f32 {
+        self.speed_rad_s
+    }
+
+    /// Whether the controller is held in the safe state (motor stopped).
+    pub fn is_safe(&self) -> bool {
+        self.last.is_some_and(|o| o.state == MotorState::Safe)
+    }
+
+    /// One control step on the module's generated handles: lifecycle, setpoints,
+    /// encoder, PID, duty, encoder publication.
+    #[allow(clippy::too_many_arguments)]
+    pub fn step<
+        const N1: usize,
+        const S1: usize,
+        const Q1: usize,
+        const N2: usize,
+        const S2: usize,
+        const Q2: usize,
+    >(
+        &mut self,
+        now: Nanos,
+        hw: &mut impl MotorHw,
+        setpoints: &Subscriber<'static, msg::WheelSpeeds, N1, S1, Q1>,
+        encoder: &Publisher<'static, msg::Encoder, N2, S2, Q2>,
+        node: &Node,
+        status: &SystemStatus,
+    ) {
+        let running = run_node(node, status);
+        self.motor.set_safe(!running);
+        while let Some(m) = setpoints.try_recv() {
+            if let Some(&w) = m.w.get(self.index) {
+                self.motor.on_setpoint(now, w);
+            }
+        }
+        if let Some(w) = self.encoder.step(now, hw.encoder_count()) {
+            self.speed_rad_s = w;
+        }
+        let out = self.motor.step(now, self.speed_rad_s);
+        hw.set_duty(out.duty);
+        self.last = Some(out);
+        self.stats.count(encoder.send(
+            msg::Encoder {
+                ticks: self.encoder.ticks(),
+                speed: self.speed_rad_s,
+            },
+            now,
+        ));
+    }
+}
+
+/// motor1: `kinematics` (100 Hz: velocity → wheel_setpoints) and `motor_ctrl1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motor1App {
+    pub ctrl: MotorCtrl,
+    ik: InverseKinematicsNode,
+    ik_every: Every,
+    pub stats: AppStats,
+}
+
+impl Default for Motor1App {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Motor1App {
+    pub const fn new() -> Self {
+        Self {
+            ctrl: MotorCtrl::new(0),
+            ik: InverseKinematicsNode::new(KinematicsConfig::TRISKAR2),
+            ik_every: Every::new(10 * MS),
+            stats: AppStats {
+                published: 0,
+                publish_errors: 0,
+            },
+        }
+    }
+
+    /// Inverse kinematics step: latest velocity in, wheel setpoints out (zero while the
+    /// node is stopped or the command is stale).
+    pub fn kinematics_step(&mut self, now: Nanos) {
+        use motor1::nodes::kinematics as k;
+        let running = run_node(&k::NODE, &motor1::STATUS);
+        let sub = k::velocity_sub();
+        while let Some(m) = sub.try_recv() {
+            if running {
+                self.ik.on_velocity(now, twist_from_msg(&m));
+            }
+        }
+        let w = if running { self.ik.step(now) } else { [0.0; 3] };
+        self.stats
+            .count(k::wheel_setpoints_pub().send(msg::WheelSpeeds { w }, now));
+    }
+
+    /// Runs what is due; returns the next local time to run at.
+    pub fn poll(&mut self, now: Nanos, hw: &mut impl MotorHw) -> Nanos {
+        // Kinematics first: a fresh setpoint reaches the local controller in the same
+        // poll (the same priority order as the firmware's tasks).
+        if self.ik_every.due(now) {
+            self.kinematics_step(now);
+        }
+        if self.ctrl.every.due(now) {
+            use motor1::nodes::motor_ctrl1 as m;
+            self.ctrl.step(
+                now,
+                hw,
+                &m::wheel_setpoints_sub(),
+                &m::encoder1_pub(),
+                &m::NODE,
+                &motor1::STATUS,
+            );
+        }
+        self.ik_every.next().min(self.ctrl.every.next())
+    }
+}
+
+/// motor2: `odometry` (50 Hz from encoder1..3) and `motor_ctrl2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motor2App {
+    pub ctrl: MotorCtrl,
+    odometry: OdometryNode,
+    odo_every: Every,
+    wheels: [f32; 3],
+    pub stats: AppStats,
+}
+
+impl Default for Motor2App {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Motor2App {
+    pub const fn new() -> Self {
+        Self {
+            ctrl: MotorCtrl::new(1),
+            odometry: OdometryNode::new(TRISKAR2, 20 * MS),
+            odo_every: Every::new(20 * MS),
+            wheels: [0.0; 3],
+            stats: AppStats {
+                published: 0,
+                publish_errors: 0,
+            },
+        }
+    }
+
+    /// Odometry's current pose estimate.
+    pub const fn pose(&self) -> Pose {
+        self.odometry.pose()
+    }
+
+    /// Odometry step: latest wheel speeds of the three encoders, pose integrated,
+    /// `odometry` published.
+    pub fn odometry_step(&mut self, now: Nanos) {
+        use motor2::nodes::odometry as o;
+        let running = run_node(&o::NODE, &motor2::STATUS);
+        let (s1, s2, s3) = (o::encoder1_sub(), o::encoder2_sub(), o::encoder3_sub());
+        for (w, speed) in self.wheels.iter_mut().zip([
+            latest(core::iter::from_fn(|| s1.try_recv().map(|m| m.speed))),
+            latest(core::iter::from_fn(|| s2.try_recv().map(|m| m.speed))),
+            latest(core::iter::from_fn(|| s3.try_recv().map(|m| m.speed))),
+        ]) {
+            if let Some(s) = speed {
+                *w = s;
+            }
+        }
+        if !running {
+            return;
+        }
+        let out = self.odometry.step(now, self.wheels);
+        self.stats.count(o::odometry_pub().send(
+            msg::Odometry {
+                x: out.pose.x,
+                y: out.pose.y,
+                theta: out.pose.theta,
+                vx: out.twist.vx,
+                vy: out.twist.vy,
+                wz: out.twist.wz,
+            },
+            now,
+        ));
+    }
+
+    /// Runs what is due; returns the next local time to run at.
+    pub fn poll(&mut self, now: Nanos, hw: &mut impl MotorHw) -> Nanos {
+        if self.ctrl.every.due(now) {
+            use motor2::nodes::motor_ctrl2 as m;
+            self.ctrl.step(
+                now,
+                hw,
+                &m::wheel_setpoints_sub(),
+                &m::encoder2_pub(),
+                &m::NODE,
+                &motor2::STATUS,
+            );
+        }
+        if self.odo_every.due(now) {
+            self.odometry_step(now);
+        }
+        self.odo_every.next().min(self.ctrl.every.next())
+    }
+}
+
+fn latest(it: impl Iterator<Item = f32>) -> Option<f32> {
+    it.last()
+}
+
+/// motor3: `motor_ctrl3` only.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motor3App {
+    pub ctrl: MotorCtrl,
+}
+
+impl Default for Motor3App {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Motor3App {
+    pub const fn new() -> Self {
+        Self {
+            ctrl: MotorCtrl::new(2),
+        }
+    }
+
+    /// Runs what is due; returns the next local time to run at.
+    pub fn poll(&mut self, now: Nanos, hw: &mut impl MotorHw) -> Nanos {
+        if self.ctrl.every.due(now) {
+            use motor3::nodes::motor_ctrl3 as m;
+            self.ctrl.step(
+                now,
+                hw,
+                &m::wheel_setpoints_sub(),
+                &m::encoder3_pub(),
+                &m::NODE,
+                &motor3::STATUS,
+            );
+        }
+        self.ctrl.every.next()
+    }
+}
+
+/// motor1's statics back to power-on (see `reset_statics`).
+pub fn reset_motor1() {
+    use motor1::topics as t;
+    super::reset_statics(
+        &motor1::STATUS,
+        &motor1::NODES,
+        &[
+            &|| t::VELOCITY.reset(),
+            &|| t::WHEEL_SETPOINTS.reset(),
+            &|| t::ENCODER1.reset(),
+        ],
+    );
+}
+
+/// motor2's statics back to power-on (see `reset_statics`).
+pub fn reset_motor2() {
+    use motor2::topics as t;
+    super::reset_statics(
+        &motor2::STATUS,
+        &motor2::NODES,
+        &[
+            &|| t::WHEEL_SETPOINTS.reset(),
+            &|| t::ENCODER1.reset(),
+            &|| t::ENCODER2.reset(),
+            &|| t::ENCODER3.reset(),
+            &|| t::ODOMETRY.reset(),
+        ],
+    );
+}
+
+/// motor3's statics back to power-on (see `reset_statics`).
+pub fn reset_motor3() {
+    use motor3::topics as t;
+    super::reset_statics(
+        &motor3::STATUS,
+        &motor3::NODES,
+        &[&|| t::WHEEL_SETPOINTS.reset(), &|| t::ENCODER3.reset()],
+    );
 }
