@@ -7,6 +7,11 @@ cd "$(dirname "$0")/.."
 echo "== host tests (cargo test --workspace)"
 cargo test --workspace
 
+host=$(rustc -vV | sed -n 's/^host: //p')
+echo "== host tests of the firmware workspaces' portable crates"
+(cd boards && cargo test -p rtcan-board-common --target "$host")
+(cd examples/triskar2 && cargo test -p triskar2-link --target "$host")
+
 echo "== on-target tests under QEMU (Cortex-M3, lm3s6965evb)"
 bash boards/run-qemu.sh
 

@@ -30,6 +30,7 @@ pub mod run;
 pub mod slots;
 pub mod svg;
 pub mod tables;
+pub mod triskar;
 pub mod traffic;
 
 pub use bus::{Bus, Module, NodeSetup, WireFrame};

@@ -29,6 +29,7 @@
 //! | [`ObstacleAvoidance`] | per command / proximity sample | twist, four ranges | overridden twist |
 //! | [`BatteryNode`] | e.g. 10 Hz | voltage, current | percentage, low flag |
 
+pub mod app;
 pub mod battery;
 pub mod encoder;
 pub mod kinematics;

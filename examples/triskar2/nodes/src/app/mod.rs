@@ -17,10 +17,13 @@ pub mod motor;
 pub mod proximity;
 pub mod psu;
 
-pub use gateway::{GatewayApp, GatewayHw};
-pub use motor::{Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw, COUNTS_PER_WHEEL_REV};
-pub use proximity::{ProximityApp, ProximityHw};
-pub use psu::{PsuApp, PsuHw};
+pub use gateway::{reset_gateway, GatewayApp, GatewayHw};
+pub use motor::{
+    reset_motor1, reset_motor2, reset_motor3, Motor1App, Motor2App, Motor3App, MotorCtrl,
+    MotorHw, COUNTS_PER_WHEEL_REV,
+};
+pub use proximity::{reset_proximity, ProximityApp, ProximityHw};
+pub use psu::{reset_psu, PsuApp, PsuHw};
 
 use crate::kinematics::Twist;
 use crate::Nanos;

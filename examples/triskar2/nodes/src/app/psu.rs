@@ -1,0 +1,135 @@
+//! The power-supply module: `battery_monitor` samples the pack at 10 Hz, publishes
+//! `battery` at 1 Hz and a `log` line at 2 Hz (both NRT).
+use core::fmt::Write as _;
+
+use rtcan::robot_toml as msg;
+use rtcan::robot_toml::psu as module;
+
+use super::{run_node, AppStats, Every, MS};
+use crate::battery::{BatteryConfig, BatteryNode, BatteryStatus};
+use crate::Nanos;
+
+/// The PSU module's hardware: the pack's voltage and current sensors.
+pub trait PsuHw {
+    /// Terminal voltage, V.
+    fn voltage_v(&mut self) -> f32;
+    /// Discharge current, A (positive out of the battery).
+    fn current_a(&mut self) -> f32;
+}
+
+/// Log codes of the `log` topic.
+pub const LOG_STATUS: u16 = 1;
+/// The battery is low.
+pub const LOG_LOW: u16 = 2;
+
+/// The PSU module.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PsuApp {
+    node: BatteryNode,
+    sample: Every,
+    battery: Every,
+    log: Every,
+    status: Option<BatteryStatus>,
+    pub stats: AppStats,
+}
+
+impl Default for PsuApp {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl PsuApp {
+    pub const fn new() -> Self {
+        Self {
+            node: BatteryNode::new(BatteryConfig::TRISKAR2),
+            sample: Every::new(100 * MS),
+            battery: Every::new(1_000 * MS),
+            log: Every::new(500 * MS),
+            status: None,
+            stats: AppStats {
+                published: 0,
+                publish_errors: 0,
+            },
+        }
+    }
+
+    /// Latest battery estimate.
+    pub const fn status(&self) -> Option<BatteryStatus> {
+        self.status
+    }
+
+    /// Runs what is due; returns the next local time to run at.
+    pub fn poll(&mut self, now: Nanos, hw: &mut impl PsuHw) -> Nanos {
+        use module::nodes::battery_monitor as n;
+        let running = run_node(&n::NODE, &module::STATUS);
+        if self.sample.due(now) {
+            self.status = Some(self.node.step(now, hw.voltage_v(), hw.current_a()));
+        }
+        if let (true, Some(s)) = (self.battery.due(now), self.status) {
+            if running {
+                let b = msg::Battery {
+                    mv: s.mv(),
+                    ma: s.ma(),
+                    pct: s.pct(),
+                };
+                self.stats.count(n::battery_pub().send(b, now));
+            }
+        }
+        if let (true, Some(s)) = (self.log.due(now), self.status) {
+            if running {
+                self.stats.count(n::log_pub().send(log_line(&s), now));
+            }
+        }
+        self.sample
+            .next()
+            .min(self.battery.next())
+            .min(self.log.next())
+    }
+}
+
+/// A `log` line describing the battery, e.g. `battery 24.61V 2.10A 91%`.
+pub fn log_line(s: &BatteryStatus) -> msg::LogLine {
+    let mut text = Text::default();
+    let _ = write!(
+        text,
+        "battery {:.2}V {:.2}A {}%",
+        s.voltage_v,
+        s.current_a,
+        s.pct()
+    );
+    msg::LogLine {
+        level: if s.low { 2 } else { 1 },
+        code: if s.low { LOG_LOW } else { LOG_STATUS },
+        text: text.buf,
+    }
+}
+
+/// A fixed 29-byte text buffer (zero padded; longer text is cut).
+#[derive(Default)]
+struct Text {
+    buf: [u8; 29],
+    len: usize,
+}
+
+impl core::fmt::Write for Text {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        for b in s.bytes() {
+            if let Some(slot) = self.buf.get_mut(self.len) {
+                *slot = b;
+                self.len += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The PSU module's statics back to power-on (see `reset_statics`).
+pub fn reset_psu() {
+    use module::topics as t;
+    super::reset_statics(
+        &module::STATUS,
+        &module::NODES,
+        &[&|| t::BATTERY.reset(), &|| t::LOG.reset()],
+    );
+}

@@ -1,0 +1,386 @@
+//! A simulated Triskar2 module: the generated engine (`rtcan::robot_toml::<m>::engine`)
+//! with the generated `ModuleHost`, the module's app from `triskar2_nodes::app`, and
+//! hardware backed by the shared [`Physics`]. The bus drives it through
+//! [`Module`](crate::bus::Module) exactly like a firmware driver drives an engine.
+use std::cell::RefCell;
+use std::rc::Rc;
+
+use rtcan::core::clock::SlotClock;
+use rtcan::core::counters::Counters;
+use rtcan::core::driver::{Mailbox, TxResult};
+use rtcan::core::{Engine, Frame, Nanos};
+use rtcan::pubsub::{ModuleHost, SystemStatus};
+use triskar2_nodes::app::{
+    GatewayApp, GatewayHw, Motor1App, Motor2App, Motor3App, MotorHw, ProximityApp, ProximityHw,
+    PsuApp, PsuHw,
+};
+use triskar2_nodes::kinematics::Twist;
+
+use super::physics::Physics;
+use crate::bus::Module;
+use crate::clock::NodeClock;
+use crate::controller::SimController;
+
+/// Shared state of one simulation: the robot and what the gateway's host link saw.
+pub struct Shared {
+    pub physics: Physics,
+    pub script: Script,
+    /// Odometry messages received by the gateway: (global ns, x, y, theta).
+    pub odometry: Vec<(Nanos, f32, f32, f32)>,
+    /// Proximity, battery and log messages received by the gateway.
+    pub proximity_rx: u32,
+    pub battery_rx: u32,
+    pub log_rx: u32,
+    /// Last log line text received by the gateway.
+    pub last_log: String,
+}
+
+/// What the host (ROS) sends through the gateway.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Script {
+    /// Forward command, m/s.
+    pub vx: f32,
+    /// Sent from this global time, ns...
+    pub from_ns: Nanos,
+    /// ...until this one (then zero is sent).
+    pub until_ns: Nanos,
+}
+
+impl Script {
+    fn command(&self, g: Nanos) -> Twist {
+        let vx = if g >= self.from_ns && g < self.until_ns {
+            self.vx
+        } else {
+            0.0
+        };
+        Twist {
+            vx,
+            vy: 0.0,
+            wz: 0.0,
+        }
+    }
+}
+
+/// Hardware of every module kind, backed by the shared robot.
+pub struct PlantHw<'a> {
+    shared: &'a mut Shared,
+    global: Nanos,
+    motor: usize,
+}
+
+impl MotorHw for PlantHw<'_> {
+    fn encoder_count(&mut self) -> u16 {
+        self.shared
+            .physics
+            .motors
+            .get(self.motor)
+            .map_or(0, |m| m.encoder_count())
+    }
+    fn set_duty(&mut self, duty: f32) {
+        if let Some(d) = self.shared.physics.duty.get_mut(self.motor) {
+            *d = duty;
+        }
+    }
+}
+
+impl ProximityHw for PlantHw<'_> {
+    fn ranges_m(&mut self) -> [f32; 4] {
+        self.shared.physics.ranges_m()
+    }
+}
+
+impl PsuHw for PlantHw<'_> {
+    fn voltage_v(&mut self) -> f32 {
+        self.shared.physics.battery.terminal_v() as f32
+    }
+    fn current_a(&mut self) -> f32 {
+        self.shared.physics.battery.current_a() as f32
+    }
+}
+
+impl GatewayHw for PlantHw<'_> {
+    fn velocity_command(&mut self, _now: Nanos) -> Option<Twist> {
+        let c = self.shared.script.command(self.global);
+        self.shared.physics.cmd = Some(c);
+        Some(c)
+    }
+    fn odometry(&mut self, _now: Nanos, m: &rtcan::robot_toml::Odometry) {
+        self.shared.odometry.push((self.global, m.x, m.y, m.theta));
+    }
+    fn proximity(&mut self, _now: Nanos, _m: &rtcan::robot_toml::Proximity) {
+        self.shared.proximity_rx += 1;
+    }
+    fn battery(&mut self, _now: Nanos, _m: &rtcan::robot_toml::Battery) {
+        self.shared.battery_rx += 1;
+    }
+    fn log(&mut self, _now: Nanos, m: &rtcan::robot_toml::LogLine) {
+        self.shared.log_rx += 1;
+        let end = m.text.iter().position(|&b| b == 0).unwrap_or(m.text.len());
+        self.shared.last_log = String::from_utf8_lossy(m.text.get(..end).unwrap_or(&[])).into();
+    }
+}
+
+/// A module's app, polled with plant-backed hardware.
+pub enum App {
+    Gateway(GatewayApp),
+    Motor1(Motor1App),
+    Motor2(Motor2App),
+    Motor3(Motor3App),
+    Proximity(ProximityApp),
+    Psu(PsuApp),
+}
+
+impl App {
+    fn poll(&mut self, now: Nanos, hw: &mut PlantHw<'_>) -> Nanos {
+        match self {
+            App::Gateway(a) => a.poll(now, hw),
+            App::Motor1(a) => a.poll(now, hw),
+            App::Motor2(a) => a.poll(now, hw),
+            App::Motor3(a) => a.poll(now, hw),
+            App::Proximity(a) => {
+                let next = a.poll(now, hw);
+                hw.shared.physics.velocity = a.last_velocity;
+                next
+            }
+            App::Psu(a) => a.poll(now, hw),
+        }
+    }
+
+    /// Measured wheel speed and whether the controller is in its safe state.
+    pub fn motor(&self) -> Option<(f32, bool)> {
+        let c = match self {
+            App::Motor1(a) => &a.ctrl,
+            App::Motor2(a) => &a.ctrl,
+            App::Motor3(a) => &a.ctrl,
+            _ => return None,
+        };
+        Some((c.speed_rad_s(), c.is_safe()))
+    }
+
+    /// Velocity publications obstacle_avoid limited.
+    pub fn overrides(&self) -> Option<u32> {
+        match self {
+            App::Proximity(a) => Some(a.overrides),
+            _ => None,
+        }
+    }
+}
+
+/// What the scenario reads from a module after (or during) a run.
+pub trait Inspect {
+    fn name(&self) -> &'static str;
+    fn counters(&self) -> Counters;
+    fn synced(&self) -> bool;
+    fn slot_clock(&self) -> &SlotClock;
+    /// Times the safe state became required after the module had been running.
+    fn safe_trips(&self) -> u32;
+    fn safe_now(&self) -> bool;
+    fn app(&self) -> &App;
+    /// SRT publications so far, per transmit index.
+    fn srt_events(&self) -> &[(u8, Vec<Nanos>)];
+}
+
+/// A simulated module, generic over the engine sizes the generated code chose.
+pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
+    pub name: &'static str,
+    pub engine: Box<Engine<'static, RX, AR, Q>>,
+    pub host: ModuleHost<'static>,
+    pub app: App,
+    pub status: &'static SystemStatus,
+    pub clock: NodeClock,
+    pub shared: Rc<RefCell<Shared>>,
+    /// The module stops executing at this global time (power loss), if set.
+    pub dies_at: Option<Nanos>,
+    /// SRT topics to log: tx index and how to read the topic's publication count.
+    pub srt: Vec<(u8, fn() -> u32, u32)>,
+    pub srt_log: Vec<(u8, Vec<Nanos>)>,
+    was_ok: bool,
+    trips: u32,
+}
+
+impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        name: &'static str,
+        engine: Engine<'static, RX, AR, Q>,
+        host: ModuleHost<'static>,
+        app: App,
+        status: &'static SystemStatus,
+        clock: NodeClock,
+        shared: Rc<RefCell<Shared>>,
+        srt: Vec<(u8, fn() -> u32)>,
+    ) -> Self {
+        let srt_log = srt.iter().map(|&(tx, _)| (tx, Vec::new())).collect();
+        SimModule {
+            name,
+            engine: Box::new(engine),
+            host,
+            app,
+            status,
+            clock,
+            shared,
+            dies_at: None,
+            srt: srt.into_iter().map(|(tx, f)| (tx, f, 0)).collect(),
+            srt_log,
+            was_ok: false,
+            trips: 0,
+        }
+    }
+
+    fn motor_index(&self) -> usize {
+        match self.app {
+            App::Motor2(_) => 1,
+            App::Motor3(_) => 2,
+            _ => 0,
+        }
+    }
+
+    /// After a driver event: physics up to now, the app, the pump into the engine,
+    /// the engine's timer; returns the next local wake-up.
+    fn run(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        let global = self.clock.global_at(now);
+        if self.dies_at.is_some_and(|d| global >= d) {
+            return None;
+        }
+        let motor = self.motor_index();
+        let app_next = {
+            let mut shared = self.shared.borrow_mut();
+            shared.physics.advance_to(global);
+            let mut hw = PlantHw {
+                shared: &mut shared,
+                global,
+                motor,
+            };
+            self.app.poll(now, &mut hw)
+        };
+        for (k, (tx, count, seen)) in self.srt.iter_mut().enumerate() {
+            let c = count();
+            if let Some((_, log)) = self.srt_log.get_mut(k).filter(|l| l.0 == *tx) {
+                for _ in *seen..c {
+                    log.push(global);
+                }
+            }
+            *seen = c;
+        }
+        let safe = self.status.safe_state_required();
+        if !safe {
+            self.was_ok = true;
+        } else if self.was_ok {
+            self.was_ok = false;
+            self.trips += 1;
+        }
+        self.host.pump(&mut self.engine, now, can);
+        let e = self.engine.poll(now, can, &mut self.host);
+        // A slot handler may have freed queue room.
+        self.host.pump(&mut self.engine, now, can);
+        Some(if e == Nanos::MAX {
+            app_next
+        } else {
+            e.min(app_next)
+        })
+    }
+}
+
+impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, AR, Q> {
+    fn start(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        self.run(now, can)
+    }
+
+    fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        self.run(now, can)
+    }
+
+    fn rx(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        if self.dies_at.is_some_and(|d| self.clock.global_at(now) >= d) {
+            return None;
+        }
+        self.engine.on_rx(frame, sof, can, &mut self.host);
+        self.run(now, can)
+    }
+
+    fn tx_done(
+        &mut self,
+        mailbox: Mailbox,
+        result: TxResult,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        if self.dies_at.is_some_and(|d| self.clock.global_at(now) >= d) {
+            return None;
+        }
+        self.engine
+            .on_tx_done(mailbox, result, now, can, &mut self.host);
+        self.run(now, can)
+    }
+
+    fn rx_overrun(&mut self, _now: Nanos) {
+        self.engine.on_rx_overrun();
+    }
+}
+
+impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX, AR, Q> {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn counters(&self) -> Counters {
+        *self.engine.counters()
+    }
+    fn synced(&self) -> bool {
+        self.engine.is_synced()
+    }
+    fn slot_clock(&self) -> &SlotClock {
+        self.engine.clock()
+    }
+    fn safe_trips(&self) -> u32 {
+        self.trips
+    }
+    fn safe_now(&self) -> bool {
+        self.status.safe_state_required()
+    }
+    fn app(&self) -> &App {
+        &self.app
+    }
+    fn srt_events(&self) -> &[(u8, Vec<Nanos>)] {
+        &self.srt_log
+    }
+}
+
+/// A module of any engine size, as the bus holds it.
+pub trait TriskarModule: Module + Inspect {}
+impl<T: Module + Inspect> TriskarModule for T {}
+
+impl Module for Box<dyn TriskarModule> {
+    fn start(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        (**self).start(now, can)
+    }
+    fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        (**self).wake(now, can)
+    }
+    fn rx(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        (**self).rx(frame, sof, now, can)
+    }
+    fn tx_done(
+        &mut self,
+        mailbox: Mailbox,
+        result: TxResult,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        (**self).tx_done(mailbox, result, now, can)
+    }
+    fn rx_overrun(&mut self, now: Nanos) {
+        (**self).rx_overrun(now)
+    }
+}

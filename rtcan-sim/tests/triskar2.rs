@@ -1,0 +1,121 @@
+//! The whole Triskar2 robot on the simulated bus: every module runs its generated
+//! engine, ModuleHost and app code; plants in place of the hardware.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+
+use rtcan_sim::run::SimConfig;
+use rtcan_sim::triskar::{self, TriskarConfig, TriskarRun};
+
+fn plan() -> rtcan_model::Plan {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robot.toml");
+    rtcan_model::Robot::load(&path).unwrap_or_else(|d| panic!("{}", d.render()))
+}
+
+fn nominal(seconds: f64, seed: u64) -> TriskarRun {
+    let cfg = TriskarConfig {
+        sim: SimConfig {
+            seconds,
+            seed,
+            ..SimConfig::default()
+        },
+        ..TriskarConfig::default()
+    };
+    triskar::run(&plan(), &cfg).unwrap()
+}
+
+#[test]
+fn robot_drives_to_the_wall_and_the_obstacle_node_stops_it_short() {
+    let r = nominal(10.0, 1);
+    for s in r.path.iter().step_by(10) {
+        eprintln!(
+            "{:5.2} x {:.3} y {:.3} vx {:.3} gap {:.3} cmd {:.2} vel {:.2}",
+            s.t_ns as f64 / 1e9,
+            s.pose.x,
+            s.pose.y,
+            s.vx,
+            s.gap_m,
+            s.cmd_vx,
+            s.velocity_vx
+        );
+    }
+    for m in &r.modules {
+        eprintln!("{m:?}");
+    }
+    eprintln!("{:?}", r.run.figures.srt);
+    // It moved: the command reached the wheels through gateway → proximity → motor1 →
+    // motors, and the robot went well over halfway to the wall (1.5 m, body 0.3 m).
+    assert!(r.max_x_m > 0.6, "max x {}", r.max_x_m);
+    // The obstacle node overrode the command and the robot stopped before the wall.
+    assert!(r.overrides > 10, "overrides {}", r.overrides);
+    assert!(
+        r.min_gap_m > 0.1 && r.min_gap_m < 0.5,
+        "min gap {}",
+        r.min_gap_m
+    );
+    assert!(r.stopped_short());
+    // At 8 s the command is still forward (until 8 s), yet the robot stands still.
+    let at_7s = r.path.iter().find(|s| s.t_ns >= 7_000_000_000).unwrap();
+    assert!(at_7s.cmd_vx > 0.29, "command still forward");
+    assert!(at_7s.vx.abs() < 0.01, "but the robot stands: {}", at_7s.vx);
+    assert!(at_7s.velocity_vx.abs() < 0.01);
+    // The bus: every HRT topic on time, no slot overlap, every module synced and none
+    // ever entering the safe state.
+    for h in &r.run.figures.hrt {
+        assert_eq!(h.misses, 0, "{}", h.name);
+        assert!(h.count > 0, "{}", h.name);
+    }
+    assert_eq!(r.run.overlaps, 0);
+    for m in &r.modules {
+        assert!(m.synced, "{} synced", m.name);
+        assert_eq!(m.safe_trips, 0, "{} tripped", m.name);
+        assert!(!m.safe_now, "{}", m.name);
+    }
+    for c in &r.run.figures.srt {
+        assert!(c.count > 50, "{}: {}", c.name, c.count);
+        assert_eq!(c.misses, 0, "{}", c.name);
+    }
+    // The gateway saw odometry tracking the true path.
+    let (t, x, _, _) = *r.odometry.last().unwrap();
+    let truth = r.path.iter().rev().find(|s| s.t_ns <= t).unwrap();
+    assert!((f64::from(x) - truth.pose.x).abs() < 0.05, "{x} vs {}", truth.pose.x);
+    assert!(r.gateway_rx.1 >= 8 && r.gateway_rx.2 >= 16, "{:?}", r.gateway_rx);
+}
+
+#[test]
+fn master_silent_puts_the_motor_modules_in_safe_state() {
+    let cfg = TriskarConfig {
+        sim: SimConfig {
+            seconds: 4.0,
+            seed: 3,
+            ..SimConfig::default()
+        },
+        // Full speed into the open: the gateway dies while the robot is driving.
+        wall_x_m: 50.0,
+        gateway_dies_at_s: Some(2.0),
+        ..TriskarConfig::default()
+    };
+    let r = triskar::run(&plan(), &cfg).unwrap();
+    let before = r.path.iter().find(|s| s.t_ns >= 1_900_000_000).unwrap();
+    assert!(before.vx > 0.25, "driving before the failure: {}", before.vx);
+    for m in r.modules.iter().filter(|m| m.name.starts_with("motor")) {
+        let (speed, safe) = m.motor.unwrap();
+        assert!(safe, "{} safe", m.name);
+        assert!(m.safe_now && m.safe_trips == 1, "{m:?}");
+        assert!(speed.abs() < 0.05, "{} wheel {speed}", m.name);
+    }
+    let last = r.path.last().unwrap();
+    assert!(last.wheels.iter().all(|w| w.abs() < 0.05), "{last:?}");
+    assert!(last.vx.abs() < 0.01);
+}
+
+#[test]
+fn same_seed_same_wire_and_path() {
+    let a = nominal(2.0, 9);
+    let b = nominal(2.0, 9);
+    assert_eq!(a.run.wire, b.run.wire);
+    assert_eq!(a.path, b.path);
+}
