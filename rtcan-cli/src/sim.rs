@@ -6,10 +6,11 @@ use rtcan_core::engine::Policy;
 use rtcan_sim::compare::{paper_comparison, paper_sweep, Comparison};
 use rtcan_sim::policy::PolicyKind;
 use rtcan_sim::run::{run_engine, Run, Scenario, SimConfig};
+use rtcan_sim::triskar::{self, report as triskar_report, TriskarConfig};
 use rtcan_sim::{candump, paper, report, robot, svg};
 
-const USAGE: &str = "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N] [--seed S]
-                 [--load X] [--ber P] [--json] [--out DIR] [--sweep]";
+const USAGE: &str = "usage: rtcan sim [robot.toml] [--scenario triskar2|rtcan-paper|file.toml] [--seconds N] [--seed S]
+                 [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]";
 
 struct Args {
     robot: Option<PathBuf>,
@@ -18,6 +19,8 @@ struct Args {
     json: bool,
     out: Option<PathBuf>,
     sweep: bool,
+    seconds_given: bool,
+    master_dies_at: Option<f64>,
 }
 
 fn parse(args: &[String]) -> Result<Args, String> {
@@ -28,6 +31,8 @@ fn parse(args: &[String]) -> Result<Args, String> {
         json: false,
         out: None,
         sweep: false,
+        seconds_given: false,
+        master_dies_at: None,
     };
     let mut it = args.iter();
     while let Some(arg) = it.next() {
@@ -35,7 +40,15 @@ fn parse(args: &[String]) -> Result<Args, String> {
         match arg.as_str() {
             "--scenario" => a.scenario = Some(value("--scenario")?),
             "--seconds" => {
-                a.cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?
+                a.cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?;
+                a.seconds_given = true;
+            }
+            "--master-dies-at" => {
+                a.master_dies_at = Some(
+                    value("--master-dies-at")?
+                        .parse()
+                        .map_err(|_| "bad --master-dies-at")?,
+                )
             }
             "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
             "--load" => a.cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
@@ -68,14 +81,14 @@ pub fn run(args: &[String]) -> i32 {
             return 2;
         }
     };
+    let default_robot = PathBuf::from("robot.toml");
     let result = match (a.scenario.as_deref(), &a.robot) {
-        (Some("triskar2"), _) => Err(
-            "the triskar2 scenario needs the plant models and Triskar2 node code, which are not in the simulator yet"
-                .to_string(),
-        ),
-        (Some("rtcan-paper"), _) | (None, None) => run_paper(&a),
+        (Some("rtcan-paper"), _) => run_paper(&a),
+        (Some("triskar2"), robot) => {
+            run_triskar(&a, robot.as_ref().unwrap_or(&default_robot), true)
+        }
         (Some(file), _) => run_user_file(&a, Path::new(file)),
-        (None, Some(robot)) => run_robot(&a, robot, &[]),
+        (None, robot) => run_triskar(&a, robot.as_ref().unwrap_or(&default_robot), false),
     };
     match result {
         Ok(()) => 0,
@@ -309,6 +322,59 @@ fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> R
     if let Some(dir) = &a.out {
         outputs(dir, &sc, &run)?;
         write(dir, "report.json", &report::run_json(&run))?;
+    }
+    Ok(())
+}
+
+/// The triskar2 scenario on `path`, which must be the robot the simulator's code was
+/// generated from (the workspace robot.toml). Any other robot runs the generic traffic
+/// scenario instead, unless triskar2 was asked for explicitly.
+fn run_triskar(a: &Args, path: &Path, explicit: bool) -> Result<(), String> {
+    let plan = rtcan_model::Robot::load(path).map_err(|d| d.render())?;
+    if let Err(why) = triskar::check_plan(&plan) {
+        if explicit {
+            return Err(format!("triskar2: {why}"));
+        }
+        eprintln!(
+            "note: {why}.\nnote: the triskar2 scenario (plants, node code) runs only the workspace robot; \
+             running the generic traffic scenario of {} instead (HRT always fresh, SRT/NRT at their declared rates).",
+            plan.file
+        );
+        return run_plan(a, &plan, &[]);
+    }
+    let mut cfg = TriskarConfig {
+        sim: a.cfg.clone(),
+        gateway_dies_at_s: a.master_dies_at,
+        ..TriskarConfig::default()
+    };
+    if !a.seconds_given {
+        cfg.sim.seconds = TriskarConfig::default().sim.seconds;
+    }
+    let t0 = Instant::now();
+    let c0 = thread_cpu_s();
+    let r = triskar::run(&plan, &cfg)?;
+    let wall = t0.elapsed().as_secs_f64();
+    let cpu = thread_cpu_s().zip(c0).map(|(b, a)| b - a);
+    let speed = cfg.sim.seconds / cpu.unwrap_or(wall).max(1e-9);
+    if a.json {
+        println!("{}", triskar_report::triskar_json(&r, speed));
+    } else {
+        println!(
+            "triskar2 on {}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n",
+            plan.file, cfg.sim.seconds, cfg.sim.seed
+        );
+        print!("{}", triskar_report::triskar_text(&r));
+        println!();
+        println!("{}", speed_line(cfg.sim.seconds, wall, cpu));
+    }
+    if let Some(dir) = &a.out {
+        let sc = robot::scenario(&plan, &[])?;
+        outputs(dir, &sc, &r.run)?;
+        write(dir, "path.svg", &triskar_report::path_svg(&r))?;
+        write(dir, "report.json", &triskar_report::triskar_json(&r, speed))?;
+        if !a.json {
+            println!("wrote {}", dir.display());
+        }
     }
     Ok(())
 }

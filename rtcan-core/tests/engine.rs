@@ -1,4 +1,9 @@
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 //! Engine behaviour on an ideal bit-accurate bus (tests/common): the RTCAN paper's
 //! benchmark schedule executed exactly, SRT in free windows only, fragmentation end to
 //! end, deadline misses and queue exhaustion reported, sync loss, malformed input.

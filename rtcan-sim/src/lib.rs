@@ -30,8 +30,8 @@ pub mod run;
 pub mod slots;
 pub mod svg;
 pub mod tables;
-pub mod triskar;
 pub mod traffic;
+pub mod triskar;
 
 pub use bus::{Bus, Module, NodeSetup, WireFrame};
 pub use clock::NodeClock;

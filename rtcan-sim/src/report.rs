@@ -99,7 +99,7 @@ pub fn comparison_text(c: &Comparison) -> String {
     s
 }
 
-fn json_str(s: &str) -> String {
+pub(crate) fn json_str(s: &str) -> String {
     let mut o = String::from("\"");
     for ch in s.chars() {
         match ch {
@@ -115,7 +115,7 @@ fn json_str(s: &str) -> String {
     o
 }
 
-fn num(x: f64) -> String {
+pub(crate) fn num(x: f64) -> String {
     if x.is_finite() {
         format!("{x:.3}")
     } else {

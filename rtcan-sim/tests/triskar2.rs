@@ -81,8 +81,16 @@ fn robot_drives_to_the_wall_and_the_obstacle_node_stops_it_short() {
     // The gateway saw odometry tracking the true path.
     let (t, x, _, _) = *r.odometry.last().unwrap();
     let truth = r.path.iter().rev().find(|s| s.t_ns <= t).unwrap();
-    assert!((f64::from(x) - truth.pose.x).abs() < 0.05, "{x} vs {}", truth.pose.x);
-    assert!(r.gateway_rx.1 >= 8 && r.gateway_rx.2 >= 16, "{:?}", r.gateway_rx);
+    assert!(
+        (f64::from(x) - truth.pose.x).abs() < 0.05,
+        "{x} vs {}",
+        truth.pose.x
+    );
+    assert!(
+        r.gateway_rx.1 >= 8 && r.gateway_rx.2 >= 16,
+        "{:?}",
+        r.gateway_rx
+    );
 }
 
 #[test]
@@ -100,7 +108,11 @@ fn master_silent_puts_the_motor_modules_in_safe_state() {
     };
     let r = triskar::run(&plan(), &cfg).unwrap();
     let before = r.path.iter().find(|s| s.t_ns >= 1_900_000_000).unwrap();
-    assert!(before.vx > 0.25, "driving before the failure: {}", before.vx);
+    assert!(
+        before.vx > 0.25,
+        "driving before the failure: {}",
+        before.vx
+    );
     for m in r.modules.iter().filter(|m| m.name.starts_with("motor")) {
         let (speed, safe) = m.motor.unwrap();
         assert!(safe, "{} safe", m.name);

@@ -246,34 +246,32 @@ fn main() -> ! {
         Stat::default(),
     );
     let mut now = m.next_wakeup();
-    for boundary in 0..180u32 {
+    let mut closes = Stat::default();
+    let mut boundaries = 0u32;
+    while boundaries < 180 {
+        // The master's slot k starts at (k + 1) slots (it starts one slot after `new(0)`);
+        // a wake-up between boundaries is a window-close abort check.
+        let since = now - SLOT_NS;
+        let boundary = (since % SLOT_NS == 0).then_some((since / SLOT_NS) as u32);
         // Keep SRT traffic queued so free windows have something to load.
-        if boundary % 20 == 3 {
+        if boundary.is_some_and(|b| b % 20 == 3) {
             let _ = m.submit(now, 3, Token(1), &mut can, &mut host);
             let _ = m.submit(now, 4, Token(2), &mut can, &mut host);
         }
         let before = can.loads;
-        let slot = boundary % 60;
         let n = meter.instructions(&mut || {
             now = m.poll(now, &mut can, &mut host);
         });
         let loaded = can.loads - before;
-        if n > 1000 {
-            hprintln!(
-                "DEBUG boundary {} slot {} loaded {} n {}",
-                boundary,
-                slot,
-                loaded,
-                n
-            );
+        match boundary.map(|b| b % 60) {
+            None => closes.add(n),
+            Some(0) => sync.add(n),
+            Some(slot) if MASK >> slot & 1 == 1 && loaded == 0 => idle.add(n),
+            Some(slot) if MASK >> slot & 1 == 1 => hrt.add(n),
+            Some(_) if loaded == 0 => free_idle.add(n),
+            Some(_) => window.add(n),
         }
-        match (slot, loaded) {
-            (0, _) => sync.add(n),
-            (_, 0) if MASK >> slot & 1 == 1 => idle.add(n),
-            (_, 0) => free_idle.add(n),
-            _ if MASK >> slot & 1 == 1 => hrt.add(n),
-            _ => window.add(n),
-        }
+        boundaries += u32::from(boundary.is_some());
         // Everything loaded is sent before the next boundary.
         for i in 0..3u8 {
             if can
@@ -300,6 +298,7 @@ fn main() -> ! {
     report("slot_boundary_hrt_load", &hrt);
     report("slot_boundary_window_fill", &window);
     report("tx_done_and_refill", &done);
+    report("window_close_check", &closes);
 
     // --- Slave receive path. ---
     let mut s = Engine::<'static, 2, 32, 8>::new(SLAVE, 5_000);

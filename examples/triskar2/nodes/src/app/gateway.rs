@@ -53,7 +53,8 @@ impl GatewayApp {
         let running = run_node(&n::NODE, &module::STATUS);
         if self.teleop.due(now) {
             if let (true, Some(cmd)) = (running, hw.velocity_command(now)) {
-                self.stats.count(n::teleop_pub().send(twist_to_msg(cmd), now));
+                self.stats
+                    .count(n::teleop_pub().send(twist_to_msg(cmd), now));
             }
         }
         let sub = n::odometry_sub();

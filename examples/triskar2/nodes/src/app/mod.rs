@@ -19,8 +19,8 @@ pub mod psu;
 
 pub use gateway::{reset_gateway, GatewayApp, GatewayHw};
 pub use motor::{
-    reset_motor1, reset_motor2, reset_motor3, Motor1App, Motor2App, Motor3App, MotorCtrl,
-    MotorHw, COUNTS_PER_WHEEL_REV,
+    reset_motor1, reset_motor2, reset_motor3, Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw,
+    COUNTS_PER_WHEEL_REV,
 };
 pub use proximity::{reset_proximity, ProximityApp, ProximityHw};
 pub use psu::{reset_psu, PsuApp, PsuHw};

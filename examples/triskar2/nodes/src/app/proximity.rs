@@ -129,10 +129,8 @@ pub fn reset_proximity() {
     super::reset_statics(
         &module::STATUS,
         &module::NODES,
-        &[
-            &|| t::TELEOP.reset(),
-            &|| t::VELOCITY.reset(),
-            &|| t::PROXIMITY.reset(),
-        ],
+        &[&|| t::TELEOP.reset(), &|| t::VELOCITY.reset(), &|| {
+            t::PROXIMITY.reset()
+        }],
     );
 }
