@@ -290,11 +290,6 @@ fn run_user_file(a: &Args, file: &Path) -> Result<(), String> {
     run_plan(a, &plan, &traffic)
 }
 
-fn run_robot(a: &Args, path: &Path, traffic: &[robot::Traffic]) -> Result<(), String> {
-    let plan = rtcan_model::Robot::load(path).map_err(|d| d.render())?;
-    run_plan(a, &plan, traffic)
-}
-
 fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> Result<(), String> {
     let sc = robot::scenario(plan, traffic)?;
     let t0 = Instant::now();

@@ -1,7 +1,8 @@
 //! A discrete-event software CAN bus: bus time advances from event to event (frame
 //! ends, engine wake-ups); when the bus is idle the lowest identifier among all loaded
 //! mailboxes wins arbitration, occupies the bus for its exact length (real stuff bits,
-//! `timing::exact_bits`) and is then received by every other node with its SOF time.
+//! `timing::exact_bits`) and is then received, with its SOF time, by every other node
+//! whose acceptance filters pass it.
 //! Each node has its own local clock (`local = bus + offset`), so slaves must really
 //! synchronise on the master's sync frame.
 use crate::meter::{Kind, Meter};
@@ -51,6 +52,11 @@ impl<'t, H: Host, const RX: usize, const A: usize, const Q: usize> Station<'t, H
             offset,
             next: 0,
         }
+    }
+    /// The same station behind acceptance filters (a module's generated `FILTERS`).
+    pub fn filtered(mut self, filters: &'static [(u32, u32)]) -> Self {
+        self.can = SoftCan::with_filters(filters);
+        self
     }
     /// Submits an SRT/NRT message at bus time `bus`.
     pub fn submit(&mut self, bus: Nanos, tx: u8, token: Token) -> Result<(), SubmitError> {
@@ -140,7 +146,7 @@ impl SoftBus {
                 if end <= t {
                     self.wire = None;
                     for (i, n) in nodes.iter_mut().enumerate() {
-                        if i != sender {
+                        if i != sender && n.can().accepts(frame.id().raw()) {
                             n.rx(&frame, sof, t, meter);
                         }
                     }

@@ -6,9 +6,10 @@
 #![no_std]
 
 pub mod bus;
-pub mod fixtures;
 pub mod meter;
+pub mod robot;
 pub mod soft_can;
+pub mod test_host;
 
 use cortex_m_semihosting::{debug, hprintln};
 

@@ -1,6 +1,7 @@
 //! One node's controller on the software bus: three mailboxes like bxCAN, abortable
-//! while they wait for arbitration; a frame on the wire cannot be aborted and completes
-//! as sent.
+//! while they wait for arbitration (a frame on the wire cannot be aborted and completes
+//! as sent), and acceptance filters like bxCAN's banks (a module's generated `FILTERS`),
+//! so the engine only sees the frames the hardware would pass it.
 use rtcan_core::driver::{Controller, Mailbox, TxResult, MAILBOXES};
 use rtcan_core::frame::Frame;
 
@@ -15,10 +16,14 @@ pub struct SoftCan {
     pub loads: u32,
     /// Abort requests so far.
     pub aborts: u32,
+    /// Acceptance filters as `(id, mask)` pairs; `None` accepts every frame.
+    filters: Option<&'static [(u32, u32)]>,
+    /// Frames the filters rejected.
+    pub rejected: u32,
 }
 
 impl SoftCan {
-    /// Empty mailboxes.
+    /// Empty mailboxes, accepting every frame.
     pub const fn new() -> Self {
         SoftCan {
             pending: [None; MAILBOXES],
@@ -26,7 +31,24 @@ impl SoftCan {
             completions: [None; MAILBOXES],
             loads: 0,
             aborts: 0,
+            filters: None,
+            rejected: 0,
         }
+    }
+    /// Empty mailboxes, accepting what one of `filters` (29-bit `(id, mask)` pairs, a
+    /// module's generated `FILTERS`) passes.
+    pub const fn with_filters(filters: &'static [(u32, u32)]) -> Self {
+        let mut c = Self::new();
+        c.filters = Some(filters);
+        c
+    }
+    /// Whether the filters pass the 29-bit identifier `raw`; counts the rejected ones.
+    pub fn accepts(&mut self, raw: u32) -> bool {
+        let pass = self.filters.is_none_or(|f| rtcan::filters_pass(f, raw));
+        if !pass {
+            self.rejected = self.rejected.wrapping_add(1);
+        }
+        pass
     }
     /// The highest-priority (lowest ID) frame waiting for arbitration, and its mailbox;
     /// equal IDs go in mailbox order, like bxCAN with TXFP = 0.

@@ -180,6 +180,10 @@ pub trait Inspect {
     fn srt_events(&self) -> &[(u8, Vec<Nanos>)];
 }
 
+/// An SRT topic whose publications are logged: tx index, the topic's publication
+/// counter, the count already logged.
+pub type SrtCounter = (u8, fn() -> u32, u32);
+
 /// A simulated module, generic over the engine sizes the generated code chose.
 pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     pub name: &'static str,
@@ -192,7 +196,7 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     /// The module stops executing at this global time (power loss), if set.
     pub dies_at: Option<Nanos>,
     /// SRT topics to log: tx index and how to read the topic's publication count.
-    pub srt: Vec<(u8, fn() -> u32, u32)>,
+    pub srt: Vec<SrtCounter>,
     pub srt_log: Vec<(u8, Vec<Nanos>)>,
     was_ok: bool,
     trips: u32,
