@@ -12,6 +12,7 @@ use rtcan_core::engine::{Engine, SubmitError};
 use rtcan_core::frame::Frame;
 use rtcan_core::time::Nanos;
 use rtcan_core::timing::{bits_to_ns, exact_bits};
+use rtcan_pubsub::ModuleHost;
 
 /// One node as the bus sees it.
 pub trait Node {
@@ -29,8 +30,34 @@ pub trait Node {
     fn tx_done(&mut self, mailbox: Mailbox, result: TxResult, now: Nanos, meter: &mut dyn Meter);
 }
 
+/// What a host does after the engine ran its slot timer: an R2P `ModuleHost` hands the
+/// messages its topics queued to the engine (`ModuleHost::pump`; the generated code's
+/// `kick` hook is not used on this bus); a host that submits directly does nothing.
+pub trait Pump: Host {
+    /// Submits what is queued above the engine; returns how many were submitted.
+    fn pump<const RX: usize, const A: usize, const Q: usize>(
+        &mut self,
+        _engine: &mut Engine<'_, RX, A, Q>,
+        _now: Nanos,
+        _can: &mut SoftCan,
+    ) -> usize {
+        0
+    }
+}
+
+impl Pump for ModuleHost<'_> {
+    fn pump<const RX: usize, const A: usize, const Q: usize>(
+        &mut self,
+        engine: &mut Engine<'_, RX, A, Q>,
+        now: Nanos,
+        can: &mut SoftCan,
+    ) -> usize {
+        ModuleHost::pump(self, engine, now, can)
+    }
+}
+
 /// An engine, its host and controller, and a local clock offset from bus time.
-pub struct Station<'t, H: Host, const RX: usize, const A: usize, const Q: usize> {
+pub struct Station<'t, H: Pump, const RX: usize, const A: usize, const Q: usize> {
     /// The engine.
     pub engine: Engine<'t, RX, A, Q>,
     /// The host above it.
@@ -42,7 +69,7 @@ pub struct Station<'t, H: Host, const RX: usize, const A: usize, const Q: usize>
     next: Nanos,
 }
 
-impl<'t, H: Host, const RX: usize, const A: usize, const Q: usize> Station<'t, H, RX, A, Q> {
+impl<'t, H: Pump, const RX: usize, const A: usize, const Q: usize> Station<'t, H, RX, A, Q> {
     /// A station whose engine starts at bus time `bus_now`.
     pub fn new(engine: Engine<'t, RX, A, Q>, host: H, offset: Nanos) -> Self {
         Station {
@@ -67,9 +94,17 @@ impl<'t, H: Host, const RX: usize, const A: usize, const Q: usize> Station<'t, H
         self.next = self.engine.next_wakeup();
         r
     }
+    /// Hands what the host queued (published SRT/NRT messages) to the engine at bus
+    /// time `bus`; returns how many were submitted.
+    pub fn pump(&mut self, bus: Nanos) -> usize {
+        let now = bus + self.offset;
+        let n = self.host.pump(&mut self.engine, now, &mut self.can);
+        self.next = self.engine.next_wakeup();
+        n
+    }
 }
 
-impl<H: Host, const RX: usize, const A: usize, const Q: usize> Node for Station<'_, H, RX, A, Q> {
+impl<H: Pump, const RX: usize, const A: usize, const Q: usize> Node for Station<'_, H, RX, A, Q> {
     fn can(&mut self) -> &mut SoftCan {
         &mut self.can
     }
@@ -84,6 +119,10 @@ impl<H: Host, const RX: usize, const A: usize, const Q: usize> Node for Station<
         let (e, c, h) = (&mut self.engine, &mut self.can, &mut self.host);
         let mut next = 0;
         meter.measure(Kind::Poll, &mut || next = e.poll(now, c, h));
+        // Not metered: the middleware's work, not the engine's slot-boundary handling.
+        if h.pump(e, now, c) > 0 {
+            next = e.next_wakeup();
+        }
         // Guard against a wake-up that is not in the future (would stall the bus loop).
         self.next = next.max(now + 1);
     }

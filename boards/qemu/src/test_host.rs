@@ -3,10 +3,13 @@
 //! robots/qemu-test.toml, see `crate::robot`), the pattern from the message ID, so a
 //! message delivered under the wrong topic, with a wrong size or with mixed-up bytes or
 //! fragments is counted as bad.
-use rtcan_core::driver::{Event, Host, Token, TxOutcome};
+use crate::bus::Pump;
 use crate::robot;
+use rtcan_core::driver::{Event, Host, Token, TxOutcome};
+use rtcan_core::id::MsgId;
 use rtcan_core::tables::{NodeTables, TxTopic};
 use rtcan_core::time::Nanos;
+use rtcan_pubsub::Message;
 
 /// Largest payload a `TestHost` handles (the test robot's largest topic is 30 bytes).
 pub const MAX_PAYLOAD: usize = 32;
@@ -39,6 +42,30 @@ pub fn pattern(id: u16, seq: u16, out: &mut [u8]) {
             _ => (seq as usize * 3 + i * 7 + id as usize * 31) as u8,
         };
     }
+}
+
+/// Message number `seq` of topic `id` as a typed (generated) message: its wire bytes
+/// are `pattern(id, seq)`. `None` only if `T` is larger than `MAX_PAYLOAD`.
+pub fn patterned<T: Message>(id: MsgId, seq: u16) -> Option<T> {
+    let mut buf = [0u8; MAX_PAYLOAD];
+    let bytes = buf.get_mut(..T::SIZE)?;
+    pattern(id.0, seq, bytes);
+    T::decode(bytes)
+}
+
+/// Checks a received typed message of topic `id` byte for byte against the pattern of
+/// its sequence number (the first two wire bytes); returns that sequence number, or
+/// `None` if any byte differs.
+pub fn check_patterned<T: Message>(id: MsgId, msg: &T) -> Option<u16> {
+    let (mut got, mut expect) = ([0u8; MAX_PAYLOAD], [0u8; MAX_PAYLOAD]);
+    let (got, expect) = (got.get_mut(..T::SIZE)?, expect.get_mut(..T::SIZE)?);
+    msg.encode(got);
+    let seq = match got {
+        [a, b, ..] => u16::from_le_bytes([*a, *b]),
+        _ => 0,
+    };
+    pattern(id.0, seq, expect);
+    (got == expect).then_some(seq)
 }
 
 /// Per receive topic: what arrived.
@@ -117,6 +144,14 @@ impl<const TX: usize, const RX: usize> TestHost<TX, RX> {
             verify: true,
         }
     }
+    /// The receive log of rx topic `rx` (an empty log for an index outside the tables).
+    pub fn rx_log(&self, rx: u8) -> RxLog {
+        self.rx.get(usize::from(rx)).copied().unwrap_or_default()
+    }
+    /// The transmit log of tx topic `tx` (an empty log for an index outside the tables).
+    pub fn tx_log(&self, tx: u8) -> TxLog {
+        self.tx.get(usize::from(tx)).copied().unwrap_or_default()
+    }
     /// Latches the next message of tx topic `tx` and returns its token, or `None` while
     /// the previous one is still with the engine.
     pub fn next_message(&mut self, tx: u8) -> Option<Token> {
@@ -131,6 +166,9 @@ impl<const TX: usize, const RX: usize> TestHost<TX, RX> {
         Some(Token(tx as u16))
     }
 }
+
+// Submits itself (`Station::submit`): nothing queued above the engine.
+impl<const TX: usize, const RX: usize> Pump for TestHost<TX, RX> {}
 
 impl<const TX: usize, const RX: usize> Host for TestHost<TX, RX> {
     fn hrt_sample(&mut self, tx: u8) -> Option<Token> {
@@ -154,9 +192,10 @@ impl<const TX: usize, const RX: usize> Host for TestHost<TX, RX> {
         }
     }
     fn deliver(&mut self, rx: u8, payload: &[u8], sof: Nanos) {
-        let (Some(log), Some(&(id, size))) =
-            (self.rx.get_mut(rx as usize), self.rx_topics.get(rx as usize))
-        else {
+        let (Some(log), Some(&(id, size))) = (
+            self.rx.get_mut(rx as usize),
+            self.rx_topics.get(rx as usize),
+        ) else {
             return;
         };
         log.count += 1;

@@ -1,7 +1,9 @@
 //! Instruction-count benchmarks on the Cortex-M3 (run under QEMU with
 //! `-icount shift=10,sleep=off`, see boards/run-qemu.sh). Prints one `BENCH` line per
 //! figure: worst case (max) and mean instructions over every call in a 3-node, 60-cycle
-//! run with HRT, fragmented HRT, SRT, fragmented SRT, NRT and heartbeat traffic.
+//! run with HRT, fragmented HRT, SRT, fragmented SRT, NRT and heartbeat traffic: the
+//! modules of robots/qemu-test.toml with their generated tables and filters, and the
+//! traffic of the `bus_exchange` test.
 #![no_std]
 #![no_main]
 
@@ -10,16 +12,14 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use lm3s6965 as _;
 use rtcan_board_common::WideClock;
-use rtcan_board_qemu::fixtures::{TestHost, MASTER, M_ARENA, SLAVE1, SLAVE2};
 use rtcan_board_qemu::meter::{KindMeter, Stat, SysTickMeter};
+use rtcan_board_qemu::robot::{self, master, slave1, slave2};
+use rtcan_board_qemu::test_host::TestHost;
 use rtcan_board_qemu::{check, pass, Node, SoftBus, SoftCan, Station};
 use rtcan_core::driver::{Controller, Mailbox};
-use rtcan_core::engine::Engine;
 use rtcan_core::fragment::{crc16, fragment_data};
 use rtcan_core::frame::Frame;
 use rtcan_core::id::{CanId, MsgId};
-
-const CYCLE: u64 = 2_000_000;
 
 fn report(name: &str, s: &Stat) {
     hprintln!(
@@ -93,43 +93,46 @@ fn main() -> ! {
         tx_done: Stat::default(),
     };
     let (mut hm, mut h1, mut h2) = (
-        TestHost::<1, 4>::new(&MASTER),
-        TestHost::<2, 1>::new(&SLAVE1),
-        TestHost::<2, 2>::new(&SLAVE2),
+        TestHost::<{ master::TX.len() }, { master::RX_COUNT }>::new(&master::TABLES),
+        TestHost::<{ slave1::TX.len() }, { slave1::RX_COUNT }>::new(&slave1::TABLES),
+        TestHost::<{ slave2::TX.len() }, { slave2::RX_COUNT }>::new(&slave2::TABLES),
     );
     hm.verify = false;
     h1.verify = false;
     h2.verify = false;
-    let mut m = Station::new(Engine::<4, M_ARENA, 8>::new(MASTER, 0), hm, 0);
-    let mut s1 = Station::new(Engine::<1, 8, 8>::new(SLAVE1, 1_000_001), h1, 1_000_001);
-    let mut s2 = Station::new(Engine::<2, 14, 8>::new(SLAVE2, 777_777), h2, 777_777);
-    let mut bus = SoftBus::new(1_000_000);
+    let mut m = Station::new(master::engine(0), hm, 0).filtered(master::FILTERS);
+    let mut s1 = Station::new(slave1::engine(1_000_001), h1, 1_000_001).filtered(slave1::FILTERS);
+    let mut s2 = Station::new(slave2::engine(777_777), h2, 777_777).filtered(slave2::FILTERS);
+    let (m_cmd, s1_log, s2_diag) = (
+        master::topics::tx::CMD,
+        slave1::topics::tx::LOG,
+        slave2::topics::tx::DIAG,
+    );
+    let cycle = robot::BUS.cycle_ns();
+    let mut bus = SoftBus::new(robot::BUS.bitrate);
     let mut t = 0;
-    while t < 60 * CYCLE {
-        t += CYCLE / 2;
+    while t < 60 * cycle {
+        t += cycle / 2;
         bus.run_until(&mut [&mut m as &mut dyn Node, &mut s1, &mut s2], t, &mut km);
         if !(s1.engine.is_synced() && s2.engine.is_synced()) {
             continue;
         }
-        if let Some(tok) = m.host.next_message(0) {
-            let _ = m.submit(t, 0, tok);
+        if let Some(tok) = m.host.next_message(m_cmd) {
+            let _ = m.submit(t, m_cmd, tok);
         }
-        if t % (2 * CYCLE) == 0 {
-            if let Some(tok) = s1.host.next_message(1) {
-                let _ = s1.submit(t, 1, tok);
+        if t.is_multiple_of(2 * cycle) {
+            if let Some(tok) = s1.host.next_message(s1_log) {
+                let _ = s1.submit(t, s1_log, tok);
             }
         }
-        if t % (5 * CYCLE) == 0 {
-            if let Some(tok) = s2.host.next_message(1) {
-                let _ = s2.submit(t, 1, tok);
+        if t.is_multiple_of(5 * cycle) {
+            if let Some(tok) = s2.host.next_message(s2_diag) {
+                let _ = s2.submit(t, s2_diag, tok);
             }
         }
     }
-    check!(
-        m.host.rx[1].count >= 55,
-        "scan received {}",
-        m.host.rx[1].count
-    );
+    let scan = m.host.rx_log(master::topics::rx::SCAN).count;
+    check!(scan >= 55, "scan received {}", scan);
     report("engine_poll_slot_boundary", &km.poll);
     report("engine_on_rx", &km.rx);
     report("engine_on_tx_done", &km.tx_done);

@@ -252,7 +252,9 @@ fn main() -> ! {
         // The master's slot k starts at (k + 1) slots (it starts one slot after `new(0)`);
         // a wake-up between boundaries is a window-close abort check.
         let since = now - SLOT_NS;
-        let boundary = (since % SLOT_NS == 0).then_some((since / SLOT_NS) as u32);
+        let boundary = since
+            .is_multiple_of(SLOT_NS)
+            .then_some((since / SLOT_NS) as u32);
         // Keep SRT traffic queued so free windows have something to load.
         if boundary.is_some_and(|b| b % 20 == 3) {
             let _ = m.submit(now, 3, Token(1), &mut can, &mut host);
