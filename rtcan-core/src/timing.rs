@@ -40,51 +40,39 @@ pub const fn worst_case_ns(dlc: u8, bitrate: u32) -> Nanos {
 /// Exact length in bits of this concrete frame (real stuff bits over SOF..CRC computed on
 /// the actual ID, DLC, data and CRC-15), including EOF and the 3-bit intermission.
 pub fn exact_bits(frame: &Frame) -> u32 {
-    // The stuffed part SOF..data as one MSB-first word (at most 39 + 64 = 103 bits).
-    let id = frame.id().raw();
-    let mut stream: u128 = 0;
-    let mut n: u32 = 0;
-    let mut put = |v: u32, bits: u32| {
-        stream = (stream << bits) | (v as u128 & ((1u128 << bits) - 1));
-        n += bits;
-    };
-    put(0, 1); // SOF, dominant
-    put(id >> 18, 11); // base ID = ID[28:18]
-    put(0b11, 2); // SRR, IDE recessive (extended frame)
-    put(id, 18); // extension = ID[17:0]
-    put(0, 3); // RTR (data frame), r1, r0
-    put(u32::from(frame.dlc()), 4);
-    for &byte in frame.data() {
-        put(u32::from(byte), 8);
-    }
-    let crc = crc15(stream, n);
-    // The CRC sequence is stuffed too, but not part of its own computation.
-    let total = n + 15;
-    let stream = (stream << 15) | crc as u128;
-    total + stuff_bits(stream, total) + TAIL_BITS
-}
-
-/// CRC-15/CAN of the `n` low bits of `stream` (MSB first): the leading `n mod 8` bits one
-/// at a time, then whole bytes through a table.
-fn crc15(stream: u128, n: u32) -> u16 {
+    // Header SOF..DLC, 39 bits MSB first: SOF(0), ID[28:18], SRR(1), IDE(1), ID[17:0],
+    // RTR(0), r1(0), r0(0), DLC.
+    let id = u64::from(frame.id().raw());
+    let header: u64 = ((id >> 18) << 27) | (0b11 << 25) | ((id & 0x3FFFF) << 7) | u64::from(frame.dlc());
+    let data = frame.data();
+    // CRC-15 over header and data: the 7 leading header bits one at a time, then bytes.
     let mut crc: u16 = 0;
-    let lead = n % 8;
-    for i in (n - lead..n).rev() {
-        let bit = (stream >> i) & 1 == 1;
+    for i in (32..39).rev() {
         let top = (crc >> 14) & 1 == 1;
         crc = (crc << 1) & 0x7FFF;
-        if bit ^ top {
+        if ((header >> i) & 1 == 1) ^ top {
             crc ^= CRC15_POLY;
         }
     }
-    let mut i = n - lead;
-    while i >= 8 {
-        i -= 8;
-        let byte = (stream >> i) as u8;
-        let idx = ((crc >> 7) as u8 ^ byte) as usize;
-        crc = ((crc << 8) ^ CRC15_TABLE.get(idx).copied().unwrap_or(0)) & 0x7FFF;
+    let low = (header as u32).to_be_bytes();
+    for &byte in low.iter().chain(data) {
+        crc = crc15_byte(crc, byte);
     }
-    crc
+    // The stuffed part as one word: header, data, then the CRC sequence (stuffed too, but
+    // not part of its own computation).
+    let mut stream = u128::from(header);
+    for &byte in data {
+        stream = (stream << 8) | u128::from(byte);
+    }
+    let n = 39 + 8 * data.len() as u32 + 15;
+    stream = (stream << 15) | u128::from(crc);
+    n + stuff_bits(stream, n) + TAIL_BITS
+}
+
+/// One byte through the CRC-15/CAN register (MSB first).
+fn crc15_byte(crc: u16, byte: u8) -> u16 {
+    let idx = ((crc >> 7) as u8 ^ byte) as usize;
+    ((crc << 8) ^ CRC15_TABLE.get(idx).copied().unwrap_or(0)) & 0x7FFF
 }
 
 /// Byte-at-a-time table for CRC-15/CAN (MSB first).
