@@ -43,7 +43,8 @@ pub fn exact_bits(frame: &Frame) -> u32 {
     // Header SOF..DLC, 39 bits MSB first: SOF(0), ID[28:18], SRR(1), IDE(1), ID[17:0],
     // RTR(0), r1(0), r0(0), DLC.
     let id = u64::from(frame.id().raw());
-    let header: u64 = ((id >> 18) << 27) | (0b11 << 25) | ((id & 0x3FFFF) << 7) | u64::from(frame.dlc());
+    let header: u64 =
+        ((id >> 18) << 27) | (0b11 << 25) | ((id & 0x3FFFF) << 7) | u64::from(frame.dlc());
     let data = frame.data();
     // CRC-15 over header and data: the 7 leading header bits one at a time, then bytes.
     let mut crc: u16 = 0;
