@@ -387,6 +387,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return Nanos::MAX;
         }
         let mut next = self.next_boundary;
+        if self.in_flight == 0 {
+            // No window frame loaded: nothing to abort (the common case on the slot path).
+            return next;
+        }
         for mb in self.mailboxes.iter() {
             if let Loaded::Window {
                 latest_start,
@@ -401,6 +405,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     fn abort_overdue(&mut self, now: Nanos, can: &mut impl Controller) {
+        if self.in_flight == 0 {
+            return;
+        }
         for (i, mb) in self.mailboxes.iter_mut().enumerate() {
             if let Loaded::Window {
                 latest_start,
