@@ -46,28 +46,42 @@ pub fn exact_bits(frame: &Frame) -> u32 {
     let header: u64 =
         ((id >> 18) << 27) | (0b11 << 25) | ((id & 0x3FFFF) << 7) | u64::from(frame.dlc());
     let data = frame.data();
-    // CRC-15 over header and data: the 7 leading header bits one at a time, then bytes.
+    // CRC-15 over header and data, a byte at a time: the header padded to 40 bits with a
+    // leading 0 (a 0 into a zero register leaves it zero), in the top 5 bytes of a word.
     let mut crc: u16 = 0;
-    for i in (32..39).rev() {
-        let top = (crc >> 14) & 1 == 1;
-        crc = (crc << 1) & 0x7FFF;
-        if ((header >> i) & 1 == 1) ^ top {
-            crc ^= CRC15_POLY;
-        }
-    }
-    let low = (header as u32).to_be_bytes();
-    for &byte in low.iter().chain(data) {
+    for &byte in (header << 24).to_be_bytes().iter().take(5).chain(data) {
         crc = crc15_byte(crc, byte);
     }
-    // The stuffed part as one word: header, data, then the CRC sequence (stuffed too, but
-    // not part of its own computation).
-    let mut stream = u128::from(header);
-    for &byte in data {
-        stream = (stream << 8) | u128::from(byte);
+    // Stuffing over header, data and CRC sequence (stuffed too, but not part of its own
+    // computation), a byte at a time. Two leading recessive bits make the 54 + 8·dlc
+    // stuffed bits a whole number of bytes without changing the count: from the state
+    // "last 0, run 1" they stuff nothing, and the dominant SOF after them starts a fresh
+    // run, as the first bit of a frame does. The 41-bit padded header is 5 bytes and one
+    // bit carried into the next byte.
+    let padded = (0b11 << 39) | header;
+    let mut state: StuffState = 0;
+    let mut stuffed = 0u32;
+    let mut feed = |byte: u8| {
+        let e = STUFF_TABLE
+            .get((usize::from(state) << 8) | usize::from(byte))
+            .copied()
+            .unwrap_or(0);
+        state = e & 7;
+        stuffed += u32::from(e >> 3);
+    };
+    for shift in [33, 25, 17, 9, 1] {
+        feed((padded >> shift) as u8);
     }
+    let mut carry = (padded & 1) as u8;
+    for &byte in data {
+        feed((carry << 7) | (byte >> 1));
+        carry = byte & 1;
+    }
+    let tail = (u16::from(carry) << 15) | crc;
+    feed((tail >> 8) as u8);
+    feed(tail as u8);
     let n = 39 + 8 * data.len() as u32 + 15;
-    stream = (stream << 15) | u128::from(crc);
-    n + stuff_bits(stream, n) + TAIL_BITS
+    n + stuffed + TAIL_BITS
 }
 
 /// One byte through the CRC-15/CAN register (MSB first).
@@ -100,33 +114,49 @@ static CRC15_TABLE: [u16; 256] = {
     t
 };
 
-/// Stuff bits inserted into the `n` low bits of `stream` (MSB first, `n` < 128): after
-/// five equal bits a complementary bit, which itself starts the next run. Bit-parallel:
-/// each step finds the first run of five with word operations, so the cost is one step
-/// per stuff bit, not one per bit.
-fn stuff_bits(stream: u128, n: u32) -> u32 {
-    // Left-aligned: frame bit i is word bit 127 - i.
-    let mut s = stream << (128 - n);
-    let mut len = n;
-    let mut stuffed = 0;
-    while len >= 5 {
-        // z: bit i set when bit i equals bit i-1 (i = 1..len-1).
-        let valid = (u128::MAX >> 1) & !(u128::MAX >> len);
-        let z = !(s ^ (s >> 1)) & valid;
-        // m: bit i set when bits i-4..=i are equal.
-        let m = z & (z >> 1) & (z >> 2) & (z >> 3);
-        if m == 0 {
-            break;
+/// Stuffing state between bits: `last << 2 | (run - 1)`, where `run` (1..=4) counts the
+/// equal bits ending with `last` (a run of 5 is never a state: the stuff bit ends it).
+type StuffState = u8;
+
+/// One bit through the stuffing rule: after five equal bits a complementary stuff bit,
+/// which itself starts the next run. Returns the new state and the stuff bits added.
+const fn stuff_step(state: StuffState, bit: bool) -> (StuffState, u8) {
+    let last = state >> 2 == 1;
+    let run = (state & 3) + 1;
+    if bit == last {
+        if run == 4 {
+            // Fifth equal bit: the stuff bit (!bit) starts a run of one.
+            ((!bit as u8) << 2, 1)
+        } else {
+            (state + 1, 0)
         }
-        let i = m.leading_zeros();
-        stuffed += 1;
-        // The stuff bit (complement of bit i) starts the rest of the stream.
-        let stuff = !(s >> (127 - i)) & 1;
-        s = (stuff << 127) | ((s << i) << 1 >> 1);
-        len -= i;
+    } else {
+        ((bit as u8) << 2, 0)
     }
-    stuffed
 }
+
+/// Stuffing of one byte (MSB first) from each state: entry `state << 8 | byte` holds the
+/// new state in bits 0..3 and the stuff bits added (at most 2) in bits 3..5. 2 KiB.
+// Built at compile time: an index out of range would be a build error.
+#[allow(clippy::indexing_slicing)]
+static STUFF_TABLE: [u8; 8 * 256] = {
+    let mut t = [0u8; 8 * 256];
+    let mut i = 0;
+    while i < 8 * 256 {
+        let mut state = (i >> 8) as StuffState;
+        let mut added = 0;
+        let mut k = 8;
+        while k > 0 {
+            k -= 1;
+            let (s, a) = stuff_step(state, (i >> k) & 1 == 1);
+            state = s;
+            added += a;
+        }
+        t[i] = state | (added << 3);
+        i += 1;
+    }
+    t
+};
 
 /// Exact frame duration at `bitrate` bit/s, ns rounded up.
 pub fn exact_ns(frame: &Frame, bitrate: u32) -> Nanos {

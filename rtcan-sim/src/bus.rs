@@ -18,8 +18,7 @@
 //! - Receive and transmit interrupts, and timer wake-ups, run `irq_latency_ns` after the
 //!   hardware event. Start-of-frame timestamps are taken by hardware, without latency,
 //!   in the receiver's local clock.
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::collections::VecDeque;
 
 use rtcan_core::driver::{Mailbox, TxResult};
 use rtcan_core::timing::{bits_to_ns, exact_bits, INTERMISSION_BITS};
@@ -115,9 +114,9 @@ pub struct BusStats {
     pub busy_ns: Nanos,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Ev {
-    Wake { node: usize, gen: u64 },
+    Wake { node: usize },
     ArbDecide,
     FrameEnd,
     RxIrq { node: usize, fifo: usize },
@@ -142,13 +141,43 @@ enum State {
     },
 }
 
+/// A scheduled event: global time in the high 64 bits, the sequence number of its
+/// scheduling in the low ones, so that one integer comparison orders events by time and
+/// those at the same time in the order they were scheduled.
+type Key = u128;
+
+/// Key of an empty event place (after every real key: sequence numbers never reach it).
+const NONE: Key = u128::MAX;
+
+fn key(t: Nanos, seq: u64) -> Key {
+    (u128::from(t) << 64) | u128::from(seq)
+}
+
+fn key_time(k: Key) -> Nanos {
+    (k >> 64) as Nanos
+}
+
+/// Where the next event is held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Source {
+    /// `Bus::bus_ev`.
+    Bus,
+    /// `Node::wake` of this node.
+    Wake(usize),
+    /// Front of `Node::irqs` of this node.
+    Irq(usize),
+}
+
 struct Node<M> {
     module: M,
     can: SimController,
     setup: NodeSetup,
-    wake_gen: u64,
-    /// Global time of the armed wake-up.
-    wake_at: Option<Nanos>,
+    /// The armed timer wake-up (at most one: re-arming replaces it, so no stale entries
+    /// are ever scheduled or popped).
+    wake: Option<Key>,
+    /// Pending interrupts, in (time, sequence) order: every interrupt is scheduled at
+    /// the current time plus this node's fixed latency, so appending keeps it sorted.
+    irqs: VecDeque<(Key, Ev)>,
     /// Last requested local wake-up and its global time (the inverse clock is costly).
     last_req: Option<(Nanos, Nanos)>,
 }
@@ -158,7 +187,13 @@ pub struct Bus<M: Module> {
     bitrate: u32,
     bit_error_rate: f64,
     nodes: Vec<Node<M>>,
-    queue: BinaryHeap<Reverse<(Nanos, u64, Ev)>>,
+    /// The bus's own next event (arbitration decision or frame end): at most one is
+    /// ever outstanding, the state machine moves Idle → Arbitrating → Busy → Idle.
+    bus_ev: Option<(Key, Ev)>,
+    /// Keys of every event place, packed for the scan that finds the next event: index 0
+    /// the bus event, `1 + 2i` node i's wake-up, `2 + 2i` node i's first interrupt;
+    /// `NONE` when empty. Mirrors `bus_ev`, `Node::wake` and `Node::irqs`.
+    keys: Vec<Key>,
     seq: u64,
     state: State,
     now: Nanos,
@@ -198,7 +233,8 @@ impl<M: Module> Bus<M> {
             bitrate: bitrate.max(1),
             bit_error_rate,
             nodes: Vec::new(),
-            queue: BinaryHeap::new(),
+            bus_ev: None,
+            keys: vec![NONE],
             seq: 0,
             state: State::Idle { from: 0 },
             now: 0,
@@ -219,10 +255,11 @@ impl<M: Module> Bus<M> {
             module,
             can,
             setup,
-            wake_gen: 0,
-            wake_at: None,
+            wake: None,
+            irqs: VecDeque::new(),
             last_req: None,
         });
+        self.keys.extend([NONE, NONE]);
         self.nodes.len() - 1
     }
 
@@ -276,9 +313,87 @@ impl<M: Module> Bus<M> {
         self.callback(i, f);
     }
 
-    fn push(&mut self, t: Nanos, ev: Ev) {
+    fn next_seq(&mut self) -> u64 {
         self.seq += 1;
-        self.queue.push(Reverse((t, self.seq, ev)));
+        self.seq
+    }
+
+    /// Schedules an interrupt of node `n` (RX or TX) at `t`.
+    fn push_irq(&mut self, n: usize, t: Nanos, ev: Ev) {
+        let seq = self.next_seq();
+        if let Some(node) = self.nodes.get_mut(n) {
+            debug_assert!(node.irqs.back().is_none_or(|&(b, _)| key_time(b) <= t));
+            if node.irqs.is_empty() {
+                if let Some(k) = self.keys.get_mut(2 + 2 * n) {
+                    *k = key(t, seq);
+                }
+            }
+            node.irqs.push_back((key(t, seq), ev));
+        }
+    }
+
+    /// Schedules the bus's arbitration decision or frame end at `t`.
+    fn push_bus(&mut self, t: Nanos, ev: Ev) {
+        let seq = self.next_seq();
+        debug_assert!(self.bus_ev.is_none());
+        self.bus_ev = Some((key(t, seq), ev));
+        if let Some(k) = self.keys.first_mut() {
+            *k = key(t, seq);
+        }
+    }
+
+    fn set_wake(&mut self, n: usize, wake: Option<Key>) {
+        if let Some(node) = self.nodes.get_mut(n) {
+            node.wake = wake;
+        }
+        if let Some(k) = self.keys.get_mut(1 + 2 * n) {
+            *k = wake.unwrap_or(NONE);
+        }
+    }
+
+    /// The earliest scheduled event: a scan over the bus slot and each node's timer and
+    /// interrupt queue front (a handful of nodes: cheaper than a heap).
+    fn next_event(&self) -> Option<(Key, Source)> {
+        let mut best = (NONE, 0);
+        for (j, &k) in self.keys.iter().enumerate() {
+            if k < best.0 {
+                best = (k, j);
+            }
+        }
+        let (k, j) = best;
+        let src = match j {
+            _ if k == NONE => return None,
+            0 => Source::Bus,
+            j if j % 2 == 1 => Source::Wake((j - 1) / 2),
+            j => Source::Irq((j - 2) / 2),
+        };
+        Some((k, src))
+    }
+
+    /// Removes the event `next_event` found.
+    fn take_event(&mut self, src: Source) -> Option<Ev> {
+        match src {
+            Source::Bus => {
+                if let Some(k) = self.keys.first_mut() {
+                    *k = NONE;
+                }
+                self.bus_ev.take().map(|(_, ev)| ev)
+            }
+            Source::Wake(i) => {
+                let armed = self.nodes.get(i)?.wake;
+                self.set_wake(i, None);
+                armed.map(|_| Ev::Wake { node: i })
+            }
+            Source::Irq(i) => {
+                let node = self.nodes.get_mut(i)?;
+                let ev = node.irqs.pop_front().map(|(_, ev)| ev);
+                let front = node.irqs.front().map_or(NONE, |&(k, _)| k);
+                if let Some(k) = self.keys.get_mut(2 + 2 * i) {
+                    *k = front;
+                }
+                ev
+            }
+        }
     }
 
     fn callback(
@@ -305,27 +420,35 @@ impl<M: Module> Bus<M> {
             };
             g.saturating_add(lat).max(now)
         });
-        // Re-arm only when the deadline moved (stale entries are skipped by generation).
-        let arm = if wake_at != node.wake_at {
-            node.wake_gen += 1;
-            node.wake_at = wake_at;
-            wake_at.map(|t| (t, node.wake_gen))
-        } else {
+        // Re-arm only when the deadline moved: an unchanged wake-up keeps its place
+        // (sequence number) among events at the same time.
+        let rearm = wake_at != node.wake.map(key_time);
+        // Synchronous completions (aborts) are rare: skip the buffer handling without.
+        let mut reports = if node.can.reports.is_empty() {
             None
+        } else {
+            Some(std::mem::take(&mut node.can.reports))
         };
-        let reports = std::mem::take(&mut node.can.reports);
-        if let Some((t, gen)) = arm {
-            self.push(t, Ev::Wake { node: i, gen });
+        if rearm {
+            let armed = wake_at.map(|t| key(t, self.next_seq()));
+            self.set_wake(i, armed);
         }
-        for (mb, r) in reports {
-            self.push(
-                now + lat,
-                Ev::TxIrq {
-                    node: i,
-                    mb: mb.0,
-                    result: result_code(r),
-                },
-            );
+        if let Some(reports) = reports.as_mut() {
+            for (mb, r) in reports.drain(..) {
+                self.push_irq(
+                    i,
+                    now + lat,
+                    Ev::TxIrq {
+                        node: i,
+                        mb: mb.0,
+                        result: result_code(r),
+                    },
+                );
+            }
+        }
+        // Hand the (emptied) buffer back, so that it is allocated once.
+        if let (Some(reports), Some(node)) = (reports, self.nodes.get_mut(i)) {
+            node.can.reports = reports;
         }
         self.maybe_start_arbitration();
     }
@@ -337,7 +460,7 @@ impl<M: Module> Bus<M> {
                 let sof = from.max(self.now);
                 self.state = State::Arbitrating { sof };
                 let t = sof + self.bit_ns();
-                self.push(t, Ev::ArbDecide);
+                self.push_bus(t, Ev::ArbDecide);
             }
         }
     }
@@ -354,11 +477,14 @@ impl<M: Module> Bus<M> {
         if !self.started {
             self.start();
         }
-        while let Some(Reverse((t, _, ev))) = self.queue.peek().copied() {
+        while let Some((k, src)) = self.next_event() {
+            let t = key_time(k);
             if t > until {
                 break;
             }
-            self.queue.pop();
+            let Some(ev) = self.take_event(src) else {
+                break;
+            };
             self.now = t;
             self.handle(ev);
         }
@@ -367,13 +493,8 @@ impl<M: Module> Bus<M> {
 
     fn handle(&mut self, ev: Ev) {
         match ev {
-            Ev::Wake { node, gen } => {
-                if let Some(n) = self.nodes.get_mut(node).filter(|n| n.wake_gen == gen) {
-                    // Fired: whatever the module asks next is a new deadline.
-                    n.wake_at = None;
-                    self.callback(node, |m, now, can| m.wake(now, can));
-                }
-            }
+            // Taken from the node, so whatever the module asks next is a new deadline.
+            Ev::Wake { node } => self.callback(node, |m, now, can| m.wake(now, can)),
             Ev::ArbDecide => self.arbitrate(),
             Ev::FrameEnd => self.frame_end(),
             Ev::RxIrq { node, fifo } => self.rx_irq(node, fifo),
@@ -418,7 +539,8 @@ impl<M: Module> Bus<M> {
                 node.can.take_mailbox(mb);
                 node.can.stats.tx_failed += 1;
                 let t = lat_now + node.setup.irq_latency_ns;
-                self.push(
+                self.push_irq(
+                    n,
                     t,
                     Ev::TxIrq {
                         node: n,
@@ -456,7 +578,7 @@ impl<M: Module> Bus<M> {
             ok,
         };
         let t = sof + bits_to_ns(end_bits, self.bitrate);
-        self.push(t, Ev::FrameEnd);
+        self.push_bus(t, Ev::FrameEnd);
     }
 
     fn frame_end(&mut self) {
@@ -549,7 +671,11 @@ impl<M: Module> Bus<M> {
             self.stats.error_frames += 1;
         }
         for &(t, ev) in &irqs {
-            self.push(t, ev);
+            let n = match ev {
+                Ev::RxIrq { node, .. } | Ev::TxIrq { node, .. } => node,
+                _ => continue,
+            };
+            self.push_irq(n, t, ev);
         }
         self.irqs = irqs;
         self.state = State::Idle { from: now + ifs };

@@ -49,8 +49,18 @@ impl NodeClock {
         if rel <= 0 {
             return 0;
         }
+        // First guess g = rel * 1e9 / (1e9 + drift) = rel - rel * drift / (1e9 + drift),
+        // in i64 while rel * drift fits (hours of simulated time; a 128-bit division is
+        // slow), else in i128. Any guess within a few ns gives the same settled result.
         let rate = GIGA + i128::from(self.drift_ppb);
-        let mut g = (rel * GIGA / rate.max(1)).max(0) as u64;
+        let guess = i64::try_from(rel)
+            .ok()
+            .zip(i64::try_from(rate).ok().filter(|&r| r > 0))
+            .and_then(|(r, rate)| Some(r - r.checked_mul(self.drift_ppb)? / rate));
+        let mut g = match guess {
+            Some(g) => g.max(0) as u64,
+            None => (rel * GIGA / rate.max(1)).max(0) as u64,
+        };
         // The integer inverse is off by at most a couple of ns; settle it exactly.
         while g > 0 && self.local(g - 1) >= l {
             g -= 1;

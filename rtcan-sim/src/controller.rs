@@ -107,11 +107,17 @@ impl SimController {
     /// The mailbox this controller offers to arbitration: lowest raw ID, then lowest
     /// mailbox number (bxCAN with TXFP = 0).
     pub fn best_pending(&self) -> Option<(usize, Pending)> {
-        self.mailboxes
-            .iter()
-            .enumerate()
-            .filter_map(|(i, p)| p.map(|p| (i, p)))
-            .min_by_key(|(i, p)| (p.frame.id().raw(), *i))
+        // A plain loop (asked for every node at every arbitration): strict `<` keeps the
+        // lowest mailbox number among equal identifiers.
+        let mut best: Option<(usize, &Pending)> = None;
+        for (i, p) in self.mailboxes.iter().enumerate() {
+            if let Some(p) = p {
+                if best.is_none_or(|(_, b)| p.frame.id().raw() < b.frame.id().raw()) {
+                    best = Some((i, p));
+                }
+            }
+        }
+        best.map(|(i, p)| (i, *p))
     }
 
     /// True when some mailbox holds a frame.

@@ -144,18 +144,34 @@ pub fn compute(
     win: Window,
     bit_ns: Nanos,
 ) -> Figures {
-    let by_id: HashMap<(usize, u16), usize> = topics
+    // (node, message ID) → topic index, looked up twice per frame: a sorted vector
+    // (binary search, no hashing). On a duplicate key the last topic wins.
+    let mut by_id: Vec<((usize, u16), usize)> = topics
         .iter()
         .enumerate()
         .map(|(i, t)| ((t.node, t.msg_id.0), i))
         .collect();
+    by_id.sort_unstable_by_key(|&(k, i)| (k, std::cmp::Reverse(i)));
+    by_id.dedup_by_key(|e| e.0);
+    let topic_of = |node: usize, msg: u16| {
+        by_id
+            .binary_search_by_key(&(node, msg), |e| e.0)
+            .ok()
+            .and_then(|k| by_id.get(k))
+            .map(|e| e.1)
+    };
     let mut figs = Figures::default();
     let span = win.to.saturating_sub(win.from).max(1) as f64;
     let ifs = Nanos::from(INTERMISSION_BITS) * bit_ns;
     // Per topic: HRT SOFs, SRT completion per sequence number.
     let mut sofs: Vec<Vec<Nanos>> = vec![Vec::new(); topics.len()];
     let mut current: Vec<Option<u32>> = vec![None; topics.len()];
-    let mut done: Vec<HashMap<u32, Nanos>> = vec![HashMap::new(); topics.len()];
+    // Completion time by sequence number; only numbers of recorded events are ever
+    // looked up, so the rest are not kept (dense vectors: no hashing per frame).
+    let mut done: Vec<Vec<Option<Nanos>>> = topics
+        .iter()
+        .map(|t| vec![None; events.get(&(t.node, t.tx)).map_or(0, Vec::len)])
+        .collect();
     for w in wire {
         if w.sof >= win.from && w.sof < win.to {
             let occ = (w.end - w.sof + ifs) as f64 / span;
@@ -167,9 +183,8 @@ pub fn compute(
             } else {
                 // The topic's class when known (baselines put priorities in the top bits),
                 // else the laxity field.
-                let class = by_id
-                    .get(&(w.node, id.msg_id().0))
-                    .and_then(|&i| topics.get(i))
+                let class = topic_of(w.node, id.msg_id().0)
+                    .and_then(|i| topics.get(i))
                     .map(|t| t.class);
                 match (class, id.laxity()) {
                     (Some(Class::Hrt), _) | (None, 0) => figs.load.hrt += occ,
@@ -182,7 +197,7 @@ pub fn compute(
             continue;
         }
         let id = w.frame.id();
-        let Some(&ti) = by_id.get(&(w.node, id.msg_id().0)) else {
+        let Some(ti) = topic_of(w.node, id.msg_id().0) else {
             if !id.is_sync() && id.laxity() != 63 {
                 figs.unknown_frames += 1;
             }
@@ -208,8 +223,11 @@ pub fn compute(
                     *cur = Some(payload_seq(w.frame.data()));
                 }
                 if id.fragment() == 0 {
-                    if let Some(seq) = cur.take() {
-                        d.entry(seq).or_insert(w.end);
+                    if let Some(slot) = cur
+                        .take()
+                        .and_then(|seq| d.get_mut(usize::try_from(seq).ok()?))
+                    {
+                        slot.get_or_insert(w.end);
                     }
                 }
             }
@@ -279,8 +297,8 @@ pub fn compute(
                 continue;
             }
             c.count += 1;
-            match d.and_then(|d| d.get(&(seq as u32))) {
-                Some(&end) => {
+            match d.and_then(|d| d.get(seq)).copied().flatten() {
+                Some(end) => {
                     let lat = end.saturating_sub(at);
                     c.latencies_ns.push(lat);
                     if lat > t.deadline_ns {

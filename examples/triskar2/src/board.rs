@@ -1,6 +1,7 @@
 //! Start-up common to every module: clock tree (HSE 8 MHz → SYSCLK 72 MHz, PCLK1
 //! 36 MHz, the constants of `rtcan_board_stm32f103`), bxCAN on PA11/PA12 at the robot's
-//! bit rate with the module's acceptance filters, the slot timer on TIM2.
+//! bit rate with the module's acceptance filters, the slot timer on TIM2. What is left
+//! goes to the module's hardware ([`FromBoard`], implemented in `io`).
 use rtcan_board_stm32f103::hal::afio::{self, AfioExt};
 use rtcan_board_stm32f103::hal::can::CanExt;
 use rtcan_board_stm32f103::hal::gpio::Floating;
@@ -10,8 +11,8 @@ use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{self, Rcc};
 use rtcan_board_stm32f103::{can_btr, BxCan, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ};
 
-use crate::robot::BUS;
 use crate::SYSCLK_HZ;
+use rtcan::robot_toml::BUS;
 
 /// CAN bit timing register for robot.toml's bit rate (a compile error if PCLK1 cannot
 /// produce it exactly).
@@ -35,12 +36,16 @@ pub struct Pins {
     pub b_crl: Cr<'B', false>,
 }
 
-/// What the module-specific code gets after the common start-up.
-pub struct Board {
+/// What the engine's driver gets from the common start-up.
+pub struct Bus {
     /// CAN adapter, enabled, filters programmed.
     pub can: BxCan<Floating>,
     /// TIM2 slot timer, running.
     pub timer: SlotTimer,
+}
+
+/// What is left for the module's hardware after the common start-up.
+pub struct Board {
     /// Clocks and bus enables.
     pub rcc: Rcc,
     /// The pins the module images use (PA11/PA12 are CAN's).
@@ -55,10 +60,18 @@ pub struct Board {
     pub tim4: pac::TIM4,
     /// USART1 (gateway host link).
     pub usart1: pac::USART1,
+    /// DMA1 (gateway host link: USART1 RX on channel 5).
+    pub dma1: pac::DMA1,
+}
+
+/// A module's hardware, built from what the common start-up left.
+pub trait FromBoard {
+    /// Configures the peripherals and pins the module uses.
+    fn from_board(board: Board) -> Self;
 }
 
 /// Brings the board up; `filters` = the module's `filter_set!(FILTERS)`.
-pub fn init(dp: pac::Peripherals, filters: FilterSet) -> Board {
+pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
     let mut flash = dp.FLASH.constrain();
     let mut rcc = dp.RCC.freeze(
         rcc::Config::hse(8.MHz())
@@ -87,9 +100,7 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> Board {
         // Unreachable with the clock tree checked above (72 MHz = 9 × 8 MHz).
         Err(_) => defmt::panic!("TIM2 clock is not a multiple of the 8 MHz tick"),
     };
-    Board {
-        can,
-        timer,
+    let board = Board {
         rcc,
         pins: Pins {
             adc: (gpioa.pa0, gpioa.pa1, gpioa.pa2, gpioa.pa3),
@@ -105,5 +116,7 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> Board {
         tim3: dp.TIM3,
         tim4: dp.TIM4,
         usart1: dp.USART1,
-    }
+        dma1: dp.DMA1,
+    };
+    (Bus { can, timer }, board)
 }

@@ -1,7 +1,7 @@
 //! The engine with everything it drives, as one RTIC resource shared by the hardware
 //! tasks (slot timer, CAN RX0/TX/SCE, kick). All of them run at the same, highest
 //! priority, so they never preempt each other and RTIC grants them the resource
-//! without a lock; node tasks below only lock it briefly to read the clock.
+//! without a lock; the module's app task only locks it briefly to read the clock.
 use rtcan_board_stm32f103::glue;
 use rtcan_board_stm32f103::hal::gpio::Floating;
 use rtcan_board_stm32f103::hal::pac::{Interrupt, NVIC};
@@ -10,28 +10,37 @@ use rtcan_core::engine::Engine;
 use rtcan_core::time::Nanos;
 use rtcan_pubsub::ModuleHost;
 
+use crate::board::Bus;
+use crate::run::DELIVERED;
+
 /// Interrupt of the kick task (unused by the F103's peripherals in these images).
 pub const KICK_INTERRUPT: Interrupt = Interrupt::EXTI1;
 
-/// A topic queued a message for the engine: pend the kick task (called from any
-/// priority, outside the topic's critical section).
+/// The app published: pend the kick task, which hands SRT/NRT messages to the engine
+/// (the generated topics of `rtcan::robot_toml` have no kick hook of their own).
 pub fn kick() {
     NVIC::pend(KICK_INTERRUPT);
 }
 
 /// Engine, CAN adapter, slot timer and the module's topics as the engine's host.
 pub struct Driver<const RX: usize, const ARENA: usize, const Q: usize> {
-    /// The protocol engine.
-    pub engine: Engine<'static, RX, ARENA, Q>,
-    /// bxCAN adapter.
-    pub can: BxCan<Floating>,
-    /// TIM2: local clock and slot alarm.
-    pub timer: SlotTimer,
-    /// The module's topics.
-    pub host: ModuleHost<'static>,
+    engine: Engine<'static, RX, ARENA, Q>,
+    can: BxCan<Floating>,
+    timer: SlotTimer,
+    host: ModuleHost<'static>,
 }
 
 impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
+    /// The driver over the module's generated engine and host.
+    pub fn new(engine: Engine<'static, RX, ARENA, Q>, bus: Bus, host: ModuleHost<'static>) -> Self {
+        Driver {
+            engine,
+            can: bus.can,
+            timer: bus.timer,
+            host,
+        }
+    }
+
     /// Local time, ns (the clock of the engine and of received messages' stamps).
     pub fn now(&self) -> Nanos {
         self.timer.now()
@@ -62,9 +71,15 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
     }
 
     /// USB_LP_CAN_RX0: received frames (reassembly, delivery to local subscribers).
+    /// A delivery wakes the app at once (event-driven nodes: obstacle_avoid on
+    /// teleop, the gateway forwarding reports), as the simulator runs it after one.
     pub fn on_rx(&mut self) {
+        let delivered = self.engine.counters().rx_delivered;
         glue::on_rx(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
         self.rearm();
+        if self.engine.counters().rx_delivered != delivered {
+            DELIVERED.notify();
+        }
     }
 
     /// USB_HP_CAN_TX: mailbox completions (the next frame is loaded from here).

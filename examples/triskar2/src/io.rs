@@ -1,13 +1,29 @@
-//! Module I/O the nodes need, at register level where the HAL's generic wrappers
-//! would only add size: the motor's encoder (TIM3 encoder mode) and H-bridge PWM
-//! (TIM4), and ADC conversions (rangers, battery). Plain values in, plain values out;
-//! the node logic never sees a peripheral.
+//! The modules' hardware behind the shared apps' traits (`triskar2_nodes::app`): what
+//! the simulator models with its plant, done here with the peripherals, at register
+//! level where the HAL's generic wrappers would only add size.
+//!
+//! | app | hardware | pins |
+//! |---|---|---|
+//! | `Motor{1,2,3}App` | [`MotorIo`]: TIM3 encoder mode, TIM4 PWM (20 kHz) | PA6/PA7, PB6/PB7 |
+//! | `ProximityApp` | [`RangerIo`]: four Sharp GP2Y0A21 on ADC1 | PA0..PA3 |
+//! | `PsuApp` | [`PsuIo`]: battery divider and current sensor on ADC1 | PA0, PA1 |
+//! | `GatewayApp` | [`GatewayIo`]: USART1 115 200 Bd, RX by DMA1 ch5 | PA9/PA10 |
+use core::cell::UnsafeCell;
+
 use rtcan_board_stm32f103::hal::adc::Adc;
 use rtcan_board_stm32f103::hal::gpio::{gpioa, gpiob, Cr};
 use rtcan_board_stm32f103::hal::gpio::{Alternate, Analog, PushPull};
 use rtcan_board_stm32f103::hal::pac;
 use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{Enable, Rcc, Reset};
+use rtcan_core::time::Nanos;
+use rtcan_pubsub::Message;
+use triskar2_link::{topic, Decoder};
+use triskar2_nodes::app::{GatewayHw, MotorHw, ProximityHw, PsuHw};
+use triskar2_nodes::Twist;
+
+use crate::board::{Board, FromBoard};
+use rtcan::robot_toml as msg;
 
 /// PWM period in timer ticks: 72 MHz / 3600 = 20 kHz (above hearing, fine for DC motors).
 const PWM_TOP: u16 = 3600;
@@ -64,14 +80,21 @@ impl MotorIo {
             _pwm: pwm,
         }
     }
+}
 
-    /// The free-running 16-bit encoder counter.
-    pub fn encoder_count(&self) -> u16 {
+impl FromBoard for MotorIo {
+    fn from_board(mut b: Board) -> Self {
+        MotorIo::new(b.tim3, b.tim4, b.pins.pwm, &mut b.pins.b_crl, &mut b.rcc)
+    }
+}
+
+impl MotorHw for MotorIo {
+    fn encoder_count(&mut self) -> u16 {
         self.tim3.cnt().read().bits() as u16
     }
 
     /// Duty cycle -1..=1 (sign = direction); anything else (NaN included) stops.
-    pub fn set_duty(&mut self, duty: f32) {
+    fn set_duty(&mut self, duty: f32) {
         let d = if duty.is_finite() {
             duty.clamp(-1.0, 1.0)
         } else {
@@ -118,20 +141,26 @@ impl Analog4 {
         }
     }
 
-    /// The four inputs, volts (a failed conversion reads NaN, which the nodes skip).
-    pub fn read_volts(&mut self) -> [f32; 4] {
+    fn from_board(mut b: Board) -> Self {
+        Analog4::new(b.adc1, b.pins.adc, &mut b.pins.a_crl, &mut b.rcc)
+    }
+
+    /// Input `channel` (0..=3), volts; a failed conversion or another channel reads
+    /// NaN, which the apps treat as no reading.
+    pub fn volts(&mut self, channel: u8) -> f32 {
         let (a0, a1, a2, a3) = &mut self.pins;
         let adc = &mut self.adc;
-        let v = |r: nb::Result<u16, ()>| match r {
+        let r: nb::Result<u16, ()> = match channel {
+            0 => adc.read(a0),
+            1 => adc.read(a1),
+            2 => adc.read(a2),
+            3 => adc.read(a3),
+            _ => return f32::NAN,
+        };
+        match r {
             Ok(c) => f32::from(c) * VOLTS_PER_COUNT,
             Err(_) => f32::NAN,
-        };
-        [
-            v(adc.read(a0)),
-            v(adc.read(a1)),
-            v(adc.read(a2)),
-            v(adc.read(a3)),
-        ]
+        }
     }
 }
 
@@ -143,5 +172,201 @@ pub fn sharp_distance_m(volts: f32) -> f32 {
         0.27 / (volts - 0.1)
     } else {
         f32::INFINITY
+    }
+}
+
+/// The proximity module's four IR rangers (front, left, back, right on PA0..PA3).
+pub struct RangerIo(Analog4);
+
+impl FromBoard for RangerIo {
+    fn from_board(b: Board) -> Self {
+        RangerIo(Analog4::from_board(b))
+    }
+}
+
+impl ProximityHw for RangerIo {
+    fn ranges_m(&mut self) -> [f32; 4] {
+        [0, 1, 2, 3].map(|ch| sharp_distance_m(self.0.volts(ch)))
+    }
+}
+
+/// PSU: battery voltage divider ratio (24 V pack → ADC range).
+pub const BATTERY_DIVIDER: f32 = 11.0;
+/// PSU: current sensor output at 0 A, V (bidirectional, ±16 A).
+pub const CURRENT_ZERO_V: f32 = 1.65;
+/// PSU: current sensor gain, V/A.
+pub const CURRENT_V_PER_A: f32 = 0.1;
+
+/// The PSU module's sensors: pack voltage through a divider on PA0, a Hall current
+/// sensor on PA1.
+pub struct PsuIo(Analog4);
+
+impl FromBoard for PsuIo {
+    fn from_board(b: Board) -> Self {
+        PsuIo(Analog4::from_board(b))
+    }
+}
+
+impl PsuHw for PsuIo {
+    fn voltage_v(&mut self) -> f32 {
+        self.0.volts(0) * BATTERY_DIVIDER
+    }
+    fn current_a(&mut self) -> f32 {
+        (self.0.volts(1) - CURRENT_ZERO_V) / CURRENT_V_PER_A
+    }
+}
+
+/// Host link bit rate.
+pub const LINK_BAUD: u32 = 115_200;
+/// A host command older than this is replaced by a stop: a host that went silent
+/// (crashed, cable out) must not leave the robot driving (4 forwarding periods).
+pub const HOST_TIMEOUT_NS: Nanos = 200_000_000;
+/// USART1 RX ring, bytes: 44 ms of a link running flat out; the app drains it at
+/// least every 50 ms and the host sends far less (an 18-byte command at 20 Hz).
+const RX_RING: usize = 512;
+
+/// The ring DMA1 channel 5 writes USART1's received bytes into.
+struct RxRing(UnsafeCell<[u8; RX_RING]>);
+
+// SAFETY: only DMA1 channel 5 writes the ring and only the one `GatewayIo` (which owns
+// USART1 and DMA1) reads it, with volatile reads of bytes the DMA already wrote.
+unsafe impl Sync for RxRing {}
+
+static RX_RING_BUF: RxRing = RxRing(UnsafeCell::new([0; RX_RING]));
+
+/// The gateway's host link (ROS side, through a USB-serial adapter: the F103's USB
+/// cannot run next to CAN). Frames: `triskar2_link`. Host → robot: the velocity
+/// command, forwarded by `ros_bridge` as `teleop`; robot → host: odometry, proximity,
+/// battery, log. RX runs by DMA into a ring (no interrupt per byte); TX blocks in
+/// the app task (87 µs a byte, a few hundred bytes a second).
+pub struct GatewayIo {
+    usart: pac::USART1,
+    dma: pac::DMA1,
+    _pins: (gpioa::PA9<Alternate<PushPull>>, gpioa::PA10),
+    read: usize,
+    decoder: Decoder,
+    command: Option<(Twist, Nanos)>,
+}
+
+impl FromBoard for GatewayIo {
+    fn from_board(mut b: Board) -> Self {
+        let (pa9, pa10) = b.pins.usart1;
+        let tx = pa9.into_alternate_push_pull(&mut b.pins.a_crh);
+        pac::USART1::enable(&mut b.rcc);
+        pac::USART1::reset(&mut b.rcc);
+        pac::DMA1::enable(&mut b.rcc);
+        // USART1 is on APB2 (72 MHz): 625, well within the 16-bit register.
+        let brr = (b.rcc.clocks.pclk2().raw() + LINK_BAUD / 2) / LINK_BAUD;
+        let brr = u16::try_from(brr).unwrap_or(u16::MAX);
+        let usart = b.usart1;
+        let dma = b.dma1;
+        let ch = dma.ch5();
+        // SAFETY (register writes below): RM0008 §13.3, §27.6 configuration values
+        // for peripherals this value owns; the DMA targets USART1's data register and
+        // the static ring, RX_RING bytes long.
+        ch.par()
+            .write(|w| unsafe { w.bits(usart.dr().as_ptr() as u32) });
+        ch.mar()
+            .write(|w| unsafe { w.bits(RX_RING_BUF.0.get() as u32) });
+        ch.ndtr().write(|w| unsafe { w.bits(RX_RING as u32) });
+        // 8-bit peripheral → memory, memory increment, circular, enabled.
+        ch.cr()
+            .write(|w| unsafe { w.bits((1 << 7) | (1 << 5) | 1) });
+        usart.brr().write(|w| unsafe { w.bits(brr) });
+        // DMA on receive; 8N1, UE | TE | RE.
+        usart.cr3().write(|w| unsafe { w.bits(1 << 6) });
+        usart
+            .cr1()
+            .write(|w| unsafe { w.bits((1 << 13) | (1 << 3) | (1 << 2)) });
+        GatewayIo {
+            usart,
+            dma,
+            _pins: (tx, pa10),
+            read: 0,
+            decoder: Decoder::new(),
+            command: None,
+        }
+    }
+}
+
+impl GatewayIo {
+    /// Decodes what the DMA received since the last call; a checked command frame
+    /// becomes the current command, stamped `now`.
+    fn drain(&mut self, now: Nanos) {
+        // NDTR counts down from RX_RING and reloads: the DMA's next write position.
+        let left = self.dma.ch5().ndtr().read().bits() as usize;
+        let write = RX_RING.saturating_sub(left) % RX_RING;
+        while self.read != write {
+            // SAFETY: `read` < RX_RING; the byte was written by the DMA (a lap of
+            // the ring by the DMA only loses bytes, which the frame check rejects).
+            let byte = unsafe {
+                RX_RING_BUF
+                    .0
+                    .get()
+                    .cast::<u8>()
+                    .add(self.read)
+                    .read_volatile()
+            };
+            self.read = (self.read + 1) % RX_RING;
+            if let Some((topic::TELEOP, payload)) = self.decoder.push(byte) {
+                match msg::Twist::decode(payload) {
+                    Some(t) => {
+                        let cmd = Twist {
+                            vx: t.vx,
+                            vy: t.vy,
+                            wz: t.wz,
+                        };
+                        self.command = Some((cmd, now));
+                    }
+                    None => defmt::warn!("command frame of {} bytes", payload.len()),
+                }
+            }
+        }
+    }
+
+    /// Writes one link frame of `m` (blocking).
+    fn send<T: Message>(&mut self, topic: u8, m: &T) {
+        let mut wire = [0u8; triskar2_link::MAX_PAYLOAD];
+        let Some(payload) = wire.get_mut(..T::SIZE) else {
+            return;
+        };
+        m.encode(payload);
+        let mut frame = [0u8; triskar2_link::MAX_PAYLOAD + triskar2_link::OVERHEAD];
+        let Some(n) = triskar2_link::encode(topic, payload, &mut frame) else {
+            return;
+        };
+        for &byte in frame.iter().take(n) {
+            // TXE (bit 7): the data register took the previous byte.
+            while self.usart.sr().read().bits() & (1 << 7) == 0 {}
+            self.usart
+                .dr()
+                .write(|w| unsafe { w.bits(u16::from(byte)) });
+        }
+    }
+}
+
+impl GatewayHw for GatewayIo {
+    /// The host's latest command while fresh, a stop once it is stale, nothing before
+    /// the host ever sent one.
+    fn velocity_command(&mut self, now: Nanos) -> Option<Twist> {
+        self.drain(now);
+        let (cmd, at) = self.command?;
+        Some(if now.saturating_sub(at) <= HOST_TIMEOUT_NS {
+            cmd
+        } else {
+            Twist::ZERO
+        })
+    }
+    fn odometry(&mut self, _now: Nanos, m: &msg::Odometry) {
+        self.send(topic::ODOMETRY, m);
+    }
+    fn proximity(&mut self, _now: Nanos, m: &msg::Proximity) {
+        self.send(topic::PROXIMITY, m);
+    }
+    fn battery(&mut self, _now: Nanos, m: &msg::Battery) {
+        self.send(topic::BATTERY, m);
+    }
+    fn log(&mut self, _now: Nanos, m: &msg::LogLine) {
+        self.send(topic::LOG, m);
     }
 }

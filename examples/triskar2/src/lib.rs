@@ -1,20 +1,23 @@
-//! Code shared by the six Triskar2 module images (src/bin/*.rs, one RTIC 2 app each):
-//! the robot's tables and topics (`robot`), the board start-up (`board`), the engine
-//! driver the hardware tasks call (`driver`), module I/O (`io`) and the node loops that
-//! run as async software tasks (`tasks`). Node logic itself is `triskar2_nodes`.
+//! Code shared by the six Triskar2 module images (src/bin/*.rs). Every image is the
+//! same RTIC 2 app (`src/module_app.rs`, included by each bin after naming its module,
+//! app and hardware): the module's generated engine and topics of
+//! `rtcan::robot_toml` (the same statics the simulator runs), driven by the CAN and
+//! slot-timer interrupts (`driver`), and one async task that polls the module's app
+//! from `triskar2_nodes::app` on the hardware of `io` — the app code the simulator
+//! runs, unchanged. Board start-up: `board`; the app task's sleep and wake-up: `run`.
 #![no_std]
 
 pub mod board;
 pub mod driver;
 pub mod io;
-pub mod robot;
-pub mod tasks;
+pub mod run;
 
 use defmt_rtt as _;
 use panic_probe as _;
 
-// SysTick monotonic at 1 kHz: wakes the periodic node loops. Time stamps come from the
-// slot timer's clock instead (125 ns ticks, the clock the engine and SOF stamps use).
+// SysTick monotonic at 1 kHz: wakes the app task at its due times. Time stamps and
+// the app's clock come from the slot timer instead (125 ns ticks, the clock the
+// engine and SOF stamps use).
 rtic_monotonics::systick_monotonic!(Mono, 1_000);
 
 /// SYSCLK, Hz (the clock tree of `rtcan_board_stm32f103`).
@@ -24,10 +27,3 @@ defmt::timestamp!("{=u32:ms}", {
     use rtic_monotonics::Monotonic;
     Mono::now().ticks()
 });
-
-/// Logs a failed `spawn` from `init` (cannot happen: each task is spawned once).
-pub fn spawned<E>(result: Result<(), E>, task: &str) {
-    if result.is_err() {
-        defmt::error!("task {} was already running", task);
-    }
-}

@@ -2,87 +2,10 @@
 #![no_std]
 #![no_main]
 
+use rtcan::robot_toml::motor3 as module;
 use triskar2_firmware as fw;
+type App = triskar2_nodes::app::Motor3App;
+type Hw = fw::io::MotorIo;
+const NAME: &str = "motor3";
 
-#[rtic::app(device = rtcan_board_stm32f103::hal::pac, dispatchers = [EXTI2, EXTI3, EXTI4])]
-mod app {
-    use super::fw;
-    use fw::driver::Driver;
-    use fw::robot::motor3 as module;
-    use module::nodes::motor_ctrl3;
-    use rtcan_board_stm32f103::filter_set;
-
-    type Drv = Driver<{ module::RX_COUNT }, { module::ARENA_BYTES }, { module::QUEUE_CAPACITY }>;
-
-    #[shared]
-    struct Shared {
-        drv: Drv,
-    }
-
-    #[local]
-    struct Local {
-        motor: fw::io::MotorIo,
-    }
-
-    #[init]
-    fn init(cx: init::Context) -> (Shared, Local) {
-        let mut b = fw::board::init(cx.device, filter_set!(module::FILTERS));
-        fw::Mono::start(cx.core.SYST, fw::SYSCLK_HZ);
-        let motor = fw::io::MotorIo::new(b.tim3, b.tim4, b.pins.pwm, &mut b.pins.b_crl, &mut b.rcc);
-        let mut drv = Driver {
-            engine: module::engine(b.timer.now()),
-            can: b.can,
-            timer: b.timer,
-            host: module::host(),
-        };
-        drv.start();
-        fw::spawned(motor_ctrl3_task::spawn(), "motor_ctrl3");
-        fw::spawned(supervisor::spawn(), "supervisor");
-        defmt::info!("motor3 up");
-        (Shared { drv }, Local { motor })
-    }
-
-    #[task(binds = TIM2, shared = [drv], priority = 4)]
-    fn slot_timer(mut cx: slot_timer::Context) {
-        cx.shared.drv.lock(|d| d.on_timer());
-    }
-
-    #[task(binds = USB_LP_CAN_RX0, shared = [drv], priority = 4)]
-    fn can_rx(mut cx: can_rx::Context) {
-        cx.shared.drv.lock(|d| d.on_rx());
-    }
-
-    #[task(binds = USB_HP_CAN_TX, shared = [drv], priority = 4)]
-    fn can_tx(mut cx: can_tx::Context) {
-        cx.shared.drv.lock(|d| d.on_tx());
-    }
-
-    #[task(binds = CAN_SCE, shared = [drv], priority = 4)]
-    fn can_sce(mut cx: can_sce::Context) {
-        cx.shared.drv.lock(|d| d.on_sce());
-    }
-
-    #[task(binds = EXTI1, shared = [drv], priority = 4)]
-    fn kick(mut cx: kick::Context) {
-        cx.shared.drv.lock(|d| d.on_kick());
-    }
-
-    #[task(shared = [drv], local = [motor], priority = 3)]
-    async fn motor_ctrl3_task(mut cx: motor_ctrl3_task::Context) {
-        fw::tasks::motor_ctrl(
-            2,
-            &motor_ctrl3::NODE,
-            &module::STATUS,
-            motor_ctrl3::wheel_setpoints_sub(),
-            motor_ctrl3::encoder3_pub(),
-            cx.local.motor,
-            || cx.shared.drv.lock(|d| d.now()),
-        )
-        .await
-    }
-
-    #[task(priority = 1)]
-    async fn supervisor(_cx: supervisor::Context) {
-        fw::tasks::supervisor(&module::STATUS).await
-    }
-}
+include!("../module_app.rs");
