@@ -157,17 +157,6 @@ fn key_time(k: Key) -> Nanos {
     (k >> 64) as Nanos
 }
 
-/// Where the next event is held.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Source {
-    /// `Bus::bus_ev`.
-    Bus,
-    /// `Node::wake` of this node.
-    Wake(usize),
-    /// Front of `Node::irqs` of this node.
-    Irq(usize),
-}
-
 struct Node<M> {
     module: M,
     can: SimController,
@@ -190,9 +179,9 @@ pub struct Bus<M: Module> {
     /// The bus's own next event (arbitration decision or frame end): at most one is
     /// ever outstanding, the state machine moves Idle → Arbitrating → Busy → Idle.
     bus_ev: Option<(Key, Ev)>,
-    /// Keys of every event place, packed for the scan that finds the next event: index 0
-    /// the bus event, `1 + 2i` node i's wake-up, `2 + 2i` node i's first interrupt;
-    /// `NONE` when empty. Mirrors `bus_ev`, `Node::wake` and `Node::irqs`.
+    /// Keys packed for the scan that finds the next event: index 0 the bus event,
+    /// `1 + i` the earlier of node i's wake-up and first interrupt; `NONE` when empty.
+    /// Mirrors `bus_ev`, `Node::wake` and `Node::irqs`.
     keys: Vec<Key>,
     seq: u64,
     state: State,
@@ -259,7 +248,7 @@ impl<M: Module> Bus<M> {
             irqs: VecDeque::new(),
             last_req: None,
         });
-        self.keys.extend([NONE, NONE]);
+        self.keys.push(NONE);
         self.nodes.len() - 1
     }
 
@@ -323,12 +312,16 @@ impl<M: Module> Bus<M> {
         let seq = self.next_seq();
         if let Some(node) = self.nodes.get_mut(n) {
             debug_assert!(node.irqs.back().is_none_or(|&(b, _)| key_time(b) <= t));
-            if node.irqs.is_empty() {
-                if let Some(k) = self.keys.get_mut(2 + 2 * n) {
-                    *k = key(t, seq);
-                }
-            }
             node.irqs.push_back((key(t, seq), ev));
+        }
+        self.refresh_key(n);
+    }
+
+    /// Recomputes node `n`'s entry of `keys`.
+    fn refresh_key(&mut self, n: usize) {
+        if let (Some(node), Some(k)) = (self.nodes.get(n), self.keys.get_mut(1 + n)) {
+            let irq = node.irqs.front().map_or(NONE, |&(k, _)| k);
+            *k = node.wake.unwrap_or(NONE).min(irq);
         }
     }
 
@@ -346,54 +339,38 @@ impl<M: Module> Bus<M> {
         if let Some(node) = self.nodes.get_mut(n) {
             node.wake = wake;
         }
-        if let Some(k) = self.keys.get_mut(1 + 2 * n) {
-            *k = wake.unwrap_or(NONE);
-        }
+        self.refresh_key(n);
     }
 
-    /// The earliest scheduled event: a scan over the bus slot and each node's timer and
-    /// interrupt queue front (a handful of nodes: cheaper than a heap).
-    fn next_event(&self) -> Option<(Key, Source)> {
+    /// The earliest scheduled event and the index of its place in `keys`: a scan over
+    /// the bus slot and one entry per node (a handful of nodes: cheaper than a heap).
+    fn next_event(&self) -> Option<(Key, usize)> {
         let mut best = (NONE, 0);
         for (j, &k) in self.keys.iter().enumerate() {
             if k < best.0 {
                 best = (k, j);
             }
         }
-        let (k, j) = best;
-        let src = match j {
-            _ if k == NONE => return None,
-            0 => Source::Bus,
-            j if j % 2 == 1 => Source::Wake((j - 1) / 2),
-            j => Source::Irq((j - 2) / 2),
-        };
-        Some((k, src))
+        (best.0 != NONE).then_some(best)
     }
 
-    /// Removes the event `next_event` found.
-    fn take_event(&mut self, src: Source) -> Option<Ev> {
-        match src {
-            Source::Bus => {
-                if let Some(k) = self.keys.first_mut() {
-                    *k = NONE;
-                }
-                self.bus_ev.take().map(|(_, ev)| ev)
+    /// Removes the event with key `k` that `next_event` found at place `j`.
+    fn take_event(&mut self, k: Key, j: usize) -> Option<Ev> {
+        let Some(n) = j.checked_sub(1) else {
+            if let Some(k) = self.keys.first_mut() {
+                *k = NONE;
             }
-            Source::Wake(i) => {
-                let armed = self.nodes.get(i)?.wake;
-                self.set_wake(i, None);
-                armed.map(|_| Ev::Wake { node: i })
-            }
-            Source::Irq(i) => {
-                let node = self.nodes.get_mut(i)?;
-                let ev = node.irqs.pop_front().map(|(_, ev)| ev);
-                let front = node.irqs.front().map_or(NONE, |&(k, _)| k);
-                if let Some(k) = self.keys.get_mut(2 + 2 * i) {
-                    *k = front;
-                }
-                ev
-            }
-        }
+            return self.bus_ev.take().map(|(_, ev)| ev);
+        };
+        let node = self.nodes.get_mut(n)?;
+        let ev = if node.wake == Some(k) {
+            node.wake = None;
+            Some(Ev::Wake { node: n })
+        } else {
+            node.irqs.pop_front().map(|(_, ev)| ev)
+        };
+        self.refresh_key(n);
+        ev
     }
 
     fn callback(
@@ -477,12 +454,12 @@ impl<M: Module> Bus<M> {
         if !self.started {
             self.start();
         }
-        while let Some((k, src)) = self.next_event() {
+        while let Some((k, j)) = self.next_event() {
             let t = key_time(k);
             if t > until {
                 break;
             }
-            let Some(ev) = self.take_event(src) else {
+            let Some(ev) = self.take_event(k, j) else {
                 break;
             };
             self.now = t;

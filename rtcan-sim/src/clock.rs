@@ -45,6 +45,10 @@ impl NodeClock {
 
     /// Earliest global time at which the local clock reads at least `l`.
     pub fn global_at(&self, l: Nanos) -> Nanos {
+        if self.drift_ppb == 0 {
+            // local = g + offset (saturating): the inverse is a subtraction.
+            return l.saturating_sub(self.offset_ns);
+        }
         let rel = i128::from(l) - i128::from(self.offset_ns);
         if rel <= 0 {
             return 0;
@@ -100,8 +104,19 @@ mod tests {
             NodeClock::new(123, 37.5),
             NodeClock::new(0, -81.0),
             NodeClock::new(9, 0.0),
+            NodeClock::new(5_000, 0.0),
+            NodeClock::new(77, 500.0),
         ] {
-            for l in [200u64, 1_000_003, 987_654_321, 5_000_000_017] {
+            // Below the offset, short and long spans, and one past the 64-bit fast path
+            // of the first guess (rel * drift overflows i64: about 12 days here).
+            for l in [
+                3u64,
+                200,
+                1_000_003,
+                987_654_321,
+                5_000_000_017,
+                10u64.pow(15),
+            ] {
                 let g = clock.global_at(l);
                 assert!(clock.local(g) >= l);
                 assert!(g == 0 || clock.local(g - 1) < l);
