@@ -898,9 +898,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 token,
                 fragment,
             } => match result {
+                // Reported only if the transfer is still the active one: an earlier
+                // fragment may have failed, and the transfer was then already reported
+                // (its remaining fragments are discarded by the receivers' CRC).
                 TxResult::Sent if fragment == 0 => {
-                    self.hrt = None;
-                    host.tx_done(tx, Some(token), TxOutcome::Sent);
+                    if self.hrt.is_some_and(|x| x.token == token && x.tx == tx) {
+                        self.hrt = None;
+                        host.tx_done(tx, Some(token), TxOutcome::Sent);
+                    }
                 }
                 TxResult::Sent => {}
                 _ => self.abandon_hrt(tx, host),

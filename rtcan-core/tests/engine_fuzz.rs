@@ -197,3 +197,25 @@ proptest! {
         run(true, events);
     }
 }
+
+/// Found by the fuzzer: an HRT transfer whose first fragment was aborted was reported
+/// `DeadlineMissed`, and then again `Sent` when its last fragment (already loaded)
+/// completed. A message is reported once.
+#[test]
+fn hrt_transfer_failed_midway_is_reported_once() {
+    use Ev::*;
+    run(
+        true,
+        vec![
+            Advance(510038),
+            Back(0),
+            Advance(89962),
+            Back(0),
+            Back(30636),
+            Advance(230636),
+            Advance(200000),
+            TxDone { mb: 0, result: 1 },
+            TxDone { mb: 2, result: 0 },
+        ],
+    );
+}
