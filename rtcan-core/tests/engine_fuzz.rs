@@ -187,7 +187,11 @@ fn run(master: bool, events: Vec<Ev>) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+    // 400 cases by default; PROPTEST_CASES=N for a longer run.
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(400),
+        ..ProptestConfig::default()
+    })]
     #[test]
     fn slave_survives_any_event_sequence(events in proptest::collection::vec(ev(), 0..200)) {
         run(false, events);
