@@ -122,6 +122,11 @@ pub struct Policy {
     /// Drop a message as soon as it can no longer make its deadline (remaining
     /// fragments × worst-case frame time > laxity), instead of spending the bus on it.
     pub drop_hopeless: bool,
+    /// At each free slot boundary, abort a waiting SRT frame whose laxity code has aged
+    /// (its encoding would now be more urgent) so it is reloaded with the fresh code:
+    /// otherwise a frame loaded early keeps a stale priority and loses arbitration to
+    /// less urgent frames loaded later. Aborting a pending frame costs no bus time.
+    pub refresh_laxity: bool,
 }
 
 impl Policy {
@@ -129,12 +134,14 @@ impl Policy {
     pub const OURS: Policy = Policy {
         fit_window_end: true,
         drop_hopeless: true,
+        refresh_laxity: true,
     };
     /// The RTCAN paper's policy as published: EDF head only, drop only once the
     /// deadline has passed.
     pub const PAPER: Policy = Policy {
         fit_window_end: false,
         drop_hopeless: false,
+        refresh_laxity: false,
     };
 }
 
@@ -200,6 +207,8 @@ enum Loaded {
         key: u64,
         latest_start: Nanos,
         abort_requested: bool,
+        /// Laxity code in the loaded identifier (it ages while the frame waits).
+        laxity: u8,
     },
 }
 
@@ -462,12 +471,42 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             // stay silent.
             return;
         }
+        if self.policy.refresh_laxity && self.in_flight > 0 {
+            self.refresh_laxities(now, can);
+        }
         let run = free_run(self.cycle_mask, slot, spc);
         self.window_end = self
             .pos
             .boundary(slot + run)
             .saturating_sub(self.tables.bus.guard_ns);
         self.refill(now, can, host);
+    }
+
+    /// Aborts waiting SRT frames whose laxity code has become more urgent (or whose
+    /// deadline passed); `on_tx_done(Aborted)` re-queues them and the refill reloads
+    /// them with a fresh code (or drops them as missed).
+    fn refresh_laxities(&mut self, now: Nanos, can: &mut impl Controller) {
+        let now_bus = self.bus_time(now);
+        let encoding = self.tables.bus.laxity;
+        for (i, mb) in self.mailboxes.iter_mut().enumerate() {
+            if let Loaded::Window {
+                item: Item::Topic { deadline, .. },
+                key,
+                abort_requested,
+                laxity,
+                ..
+            } = mb
+            {
+                if *key == NRT_KEY || *abort_requested {
+                    continue;
+                }
+                let fresh = encoding.encode(*deadline as SNanos - now_bus as SNanos);
+                if fresh.is_none_or(|c| c < *laxity) {
+                    *abort_requested = true;
+                    can.abort(Mailbox(i as u8));
+                }
+            }
+        }
     }
 
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
@@ -683,6 +722,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     key,
                     latest_start,
                     abort_requested: false,
+                    laxity: frame.id().laxity(),
                 };
             }
             self.in_flight += 1;

@@ -46,19 +46,20 @@ pub fn exact_bits(frame: &Frame) -> u32 {
     let header: u64 =
         ((id >> 18) << 27) | (0b11 << 25) | ((id & 0x3FFFF) << 7) | u64::from(frame.dlc());
     let data = frame.data();
+    // Two independent table walks, interleaved so that their load chains overlap:
+    //
     // CRC-15 over header and data, a byte at a time: the header padded to 40 bits with a
     // leading 0 (a 0 into a zero register leaves it zero), in the top 5 bytes of a word.
-    let mut crc: u16 = 0;
-    for &byte in (header << 24).to_be_bytes().iter().take(5).chain(data) {
-        crc = crc15_byte(crc, byte);
-    }
+    //
     // Stuffing over header, data and CRC sequence (stuffed too, but not part of its own
     // computation), a byte at a time. Two leading recessive bits make the 54 + 8·dlc
     // stuffed bits a whole number of bytes without changing the count: from the state
     // "last 0, run 1" they stuff nothing, and the dominant SOF after them starts a fresh
     // run, as the first bit of a frame does. The 41-bit padded header is 5 bytes and one
     // bit carried into the next byte.
+    let crc_header = (header << 24).to_be_bytes();
     let padded = (0b11 << 39) | header;
+    let mut crc: u16 = 0;
     let mut state: StuffState = 0;
     let mut stuffed = 0u32;
     let mut feed = |byte: u8| {
@@ -69,11 +70,13 @@ pub fn exact_bits(frame: &Frame) -> u32 {
         state = e & 7;
         stuffed += u32::from(e >> 3);
     };
-    for shift in [33, 25, 17, 9, 1] {
+    for (&byte, shift) in crc_header.iter().zip([33, 25, 17, 9, 1]) {
+        crc = crc15_byte(crc, byte);
         feed((padded >> shift) as u8);
     }
     let mut carry = (padded & 1) as u8;
     for &byte in data {
+        crc = crc15_byte(crc, byte);
         feed((carry << 7) | (byte >> 1));
         carry = byte & 1;
     }

@@ -1,5 +1,10 @@
-//! The discrete-event CAN bus: global time in ns, one event queue, arbitration, frame
-//! timing from the real bits, receive FIFOs, interrupt latency, bit errors.
+//! The discrete-event CAN bus: global time in ns, arbitration, frame timing from the real
+//! bits, receive FIFOs, interrupt latency, bit errors.
+//!
+//! Events are kept where they belong rather than in one priority queue: the bus's own
+//! next event (at most one), one armed timer per node, and per node a FIFO of interrupts.
+//! Every event carries (time, scheduling sequence number); the next one is the smallest
+//! over these places, so events at the same time run in the order they were scheduled.
 //!
 //! What is modelled, and how:
 //! - A node that has a pending frame when the bus is idle starts a start-of-frame; every
@@ -141,16 +146,25 @@ enum State {
     },
 }
 
-/// A scheduled event: global time in the high 64 bits, the sequence number of its
-/// scheduling in the low ones, so that one integer comparison orders events by time and
-/// those at the same time in the order they were scheduled.
+/// A scheduled event: global time in the high 64 bits, then the sequence number of its
+/// scheduling, so that one integer comparison orders events by time and those at the
+/// same time in the order they were scheduled. The low `PLACE_BITS` are zero; in
+/// `Bus::keys` they hold the index of the place, so that the next event and where it is
+/// come out of one branch-free minimum.
 type Key = u128;
+
+/// Low bits of a key left for the place index (places: the bus and up to 4095 nodes).
+const PLACE_BITS: u32 = 12;
+const PLACE_MASK: Key = (1 << PLACE_BITS) - 1;
 
 /// Key of an empty event place (after every real key: sequence numbers never reach it).
 const NONE: Key = u128::MAX;
 
 fn key(t: Nanos, seq: u64) -> Key {
-    (u128::from(t) << 64) | u128::from(seq)
+    // 2^52 events (decades of simulated time at millions of events per second) before
+    // the sequence number would run into the time bits.
+    debug_assert!(seq < 1 << (64 - PLACE_BITS));
+    (u128::from(t) << 64) | (u128::from(seq) << PLACE_BITS)
 }
 
 fn key_time(k: Key) -> Nanos {
@@ -179,9 +193,10 @@ pub struct Bus<M: Module> {
     /// The bus's own next event (arbitration decision or frame end): at most one is
     /// ever outstanding, the state machine moves Idle → Arbitrating → Busy → Idle.
     bus_ev: Option<(Key, Ev)>,
-    /// Keys packed for the scan that finds the next event: index 0 the bus event,
-    /// `1 + i` the earlier of node i's wake-up and first interrupt; `NONE` when empty.
-    /// Mirrors `bus_ev`, `Node::wake` and `Node::irqs`.
+    /// Keys packed for the scan that finds the next event, each with its own index in
+    /// the low `PLACE_BITS`: index 0 the bus event, `1 + i` the earlier of node i's
+    /// wake-up and first interrupt; `NONE` when empty. Mirrors `bus_ev`, `Node::wake`
+    /// and `Node::irqs`.
     keys: Vec<Key>,
     seq: u64,
     state: State,
@@ -248,6 +263,8 @@ impl<M: Module> Bus<M> {
             irqs: VecDeque::new(),
             last_req: None,
         });
+        // Place 1 + i of node i fits the key's PLACE_BITS for any real bus: module indices
+        // are 8-bit.
         self.keys.push(NONE);
         self.nodes.len() - 1
     }
@@ -321,7 +338,8 @@ impl<M: Module> Bus<M> {
     fn refresh_key(&mut self, n: usize) {
         if let (Some(node), Some(k)) = (self.nodes.get(n), self.keys.get_mut(1 + n)) {
             let irq = node.irqs.front().map_or(NONE, |&(k, _)| k);
-            *k = node.wake.unwrap_or(NONE).min(irq);
+            // NONE | place = NONE: an empty place stays empty.
+            *k = node.wake.unwrap_or(NONE).min(irq) | (1 + n) as Key;
         }
     }
 
@@ -331,7 +349,7 @@ impl<M: Module> Bus<M> {
         debug_assert!(self.bus_ev.is_none());
         self.bus_ev = Some((key(t, seq), ev));
         if let Some(k) = self.keys.first_mut() {
-            *k = key(t, seq);
+            *k = key(t, seq); // place 0
         }
     }
 
@@ -342,16 +360,12 @@ impl<M: Module> Bus<M> {
         self.refresh_key(n);
     }
 
-    /// The earliest scheduled event and the index of its place in `keys`: a scan over
-    /// the bus slot and one entry per node (a handful of nodes: cheaper than a heap).
+    /// The earliest scheduled event and the index of its place in `keys`: a branch-free
+    /// minimum over the bus slot and one entry per node (a handful of nodes: cheaper
+    /// than a heap).
     fn next_event(&self) -> Option<(Key, usize)> {
-        let mut best = (NONE, 0);
-        for (j, &k) in self.keys.iter().enumerate() {
-            if k < best.0 {
-                best = (k, j);
-            }
-        }
-        (best.0 != NONE).then_some(best)
+        let m = self.keys.iter().fold(NONE, |a, &k| a.min(k));
+        (m != NONE).then_some((m & !PLACE_MASK, (m & PLACE_MASK) as usize))
     }
 
     /// Removes the event with key `k` that `next_event` found at place `j`.

@@ -173,9 +173,11 @@ pub fn compute(
         .map(|t| vec![None; events.get(&(t.node, t.tx)).map_or(0, Vec::len)])
         .collect();
     for w in wire {
+        let id = w.frame.id();
+        // Looked up once per frame (load class and per-topic figures).
+        let topic = topic_of(w.node, id.msg_id().0);
         if w.sof >= win.from && w.sof < win.to {
             let occ = (w.end - w.sof + ifs) as f64 / span;
-            let id = w.frame.id();
             if !w.ok {
                 figs.load.errors += occ;
             } else if id.is_sync() {
@@ -183,9 +185,7 @@ pub fn compute(
             } else {
                 // The topic's class when known (baselines put priorities in the top bits),
                 // else the laxity field.
-                let class = topic_of(w.node, id.msg_id().0)
-                    .and_then(|i| topics.get(i))
-                    .map(|t| t.class);
+                let class = topic.and_then(|i| topics.get(i)).map(|t| t.class);
                 match (class, id.laxity()) {
                     (Some(Class::Hrt), _) | (None, 0) => figs.load.hrt += occ,
                     (Some(Class::Nrt), _) | (None, 63) => figs.load.nrt += occ,
@@ -196,8 +196,7 @@ pub fn compute(
         if !w.ok {
             continue;
         }
-        let id = w.frame.id();
-        let Some(ti) = topic_of(w.node, id.msg_id().0) else {
+        let Some(ti) = topic else {
             if !id.is_sync() && id.laxity() != 63 {
                 figs.unknown_frames += 1;
             }

@@ -91,17 +91,15 @@ pub fn fill_payload(buf: &mut [u8], seq: u32, node: u8, tx: u8) {
 }
 
 /// True when `payload` is an identity payload: the one `fill_payload` gives for the
-/// sequence number, node and topic it carries.
+/// sequence number, node and topic it carries. Bytes 0..6 are that header itself, so
+/// only the pattern after it (derived from the low sequence byte) is checked.
 pub fn is_identity_payload(payload: &[u8]) -> bool {
-    let seq = payload_seq(payload);
-    let (node, tx) = (
-        payload.get(4).copied().unwrap_or(0),
-        payload.get(5).copied().unwrap_or(0),
-    );
+    let s31 = payload.first().copied().unwrap_or(0).wrapping_mul(31);
     payload
         .iter()
         .enumerate()
-        .all(|(i, &b)| b == payload_byte(i, seq, node, tx))
+        .skip(6)
+        .all(|(i, &b)| b == s31.wrapping_add(i as u8))
 }
 
 /// Sequence number of an identity payload (its first bytes; shorter payloads pad 0).
@@ -412,6 +410,26 @@ mod tests {
             let mut other = buf.clone();
             fill_payload(&mut other, 77, 9, 1);
             assert!(is_identity_payload(&other));
+            // Agrees with rebuilding the expected payload, on arbitrary bytes too.
+            let mut x = 0x2545_F491_u32.wrapping_add(len as u32);
+            for _ in 0..200 {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                let mut p = buf.clone();
+                let k = (x as usize) % len.max(1);
+                if len > 0 {
+                    p[k] = (x >> 8) as u8;
+                }
+                let mut expect = vec![0u8; len];
+                fill_payload(
+                    &mut expect,
+                    payload_seq(&p),
+                    p.get(4).copied().unwrap_or(0),
+                    p.get(5).copied().unwrap_or(0),
+                );
+                assert_eq!(is_identity_payload(&p), expect == p, "{p:02X?}");
+            }
         }
     }
 }
