@@ -63,10 +63,7 @@ pub fn exact_bits(frame: &Frame) -> u32 {
     let mut state: StuffState = 0;
     let mut stuffed = 0u32;
     let mut feed = |byte: u8| {
-        let e = STUFF_TABLE
-            .get((usize::from(state) << 8) | usize::from(byte))
-            .copied()
-            .unwrap_or(0);
+        let e = stuff_byte(state, byte);
         state = e & 7;
         stuffed += u32::from(e >> 3);
     };
@@ -138,10 +135,38 @@ const fn stuff_step(state: StuffState, bit: bool) -> (StuffState, u8) {
     }
 }
 
-/// Stuffing of one byte (MSB first) from each state: entry `state << 8 | byte` holds the
-/// new state in bits 0..3 and the stuff bits added (at most 2) in bits 3..5. 2 KiB.
+/// One byte (MSB first) through the stuffing rule from `state`: the new state in bits
+/// 0..3, the stuff bits added (at most 2) in bits 3..5. On the host (the simulator calls
+/// this for every frame) a 2 KiB table; on a microcontroller, whose receive path needs it
+/// once per frame and whose flash is budgeted, eight steps of the same rule.
+#[cfg(not(target_os = "none"))]
+fn stuff_byte(state: StuffState, byte: u8) -> u8 {
+    STUFF_TABLE
+        .get((usize::from(state) << 8) | usize::from(byte))
+        .copied()
+        .unwrap_or(0)
+}
+
+#[cfg(target_os = "none")]
+fn stuff_byte(state: StuffState, byte: u8) -> u8 {
+    stuff_byte_steps(state, byte)
+}
+
+#[cfg(any(test, target_os = "none"))]
+fn stuff_byte_steps(mut state: StuffState, byte: u8) -> u8 {
+    let mut added = 0;
+    for k in (0..8).rev() {
+        let (s, a) = stuff_step(state, (byte >> k) & 1 == 1);
+        state = s;
+        added += a;
+    }
+    state | (added << 3)
+}
+
+/// `stuff_byte` for every state and byte: entry `state << 8 | byte`.
 // Built at compile time: an index out of range would be a build error.
 #[allow(clippy::indexing_slicing)]
+#[cfg(not(target_os = "none"))]
 static STUFF_TABLE: [u8; 8 * 256] = {
     let mut t = [0u8; 8 * 256];
     let mut i = 0;
@@ -237,6 +262,20 @@ impl BitWriter {
 mod tests {
     use super::*;
     use crate::id::CanId;
+
+    /// The firmware's step-by-step byte stuffing equals the host's table everywhere.
+    #[test]
+    fn stuff_table_equals_the_step_rule() {
+        for state in 0..8u8 {
+            for byte in 0..=255u8 {
+                assert_eq!(
+                    stuff_byte(state, byte),
+                    stuff_byte_steps(state, byte),
+                    "{state} {byte:02X}"
+                );
+            }
+        }
+    }
 
     /// The bit-by-bit reference (`BitWriter`) and the fast path agree on every frame.
     #[test]
