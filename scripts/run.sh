@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 robot="${1:-robot.toml}"
 shift || true
 
-command -v flip-link >/dev/null 2>&1 || cargo install flip-link --locked --quiet
+bash scripts/setup.sh
 
 echo "== rtcan check $robot (admission, IDs, filters, calendar)"
 cargo run --release --quiet -p rtcan-cli -- check "$robot"

@@ -3,6 +3,7 @@
 # then the firmware images and their size budgets. Fails on the first failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+bash scripts/setup.sh --qemu
 
 echo "== host tests (cargo test --workspace)"
 cargo test --workspace

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Idempotent set-up from the project's own files, for a fresh machine (and CI):
+# the toolchain of rust-toolchain.toml with its target and components (also when
+# RUSTUP_AUTO_INSTALL=0), flip-link for the firmware, and with `--qemu` Debian's
+# qemu-system-arm for the on-target tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+rustup show active-toolchain >/dev/null 2>&1 || rustup toolchain install stable --profile minimal
+rustup target add thumbv7m-none-eabi >/dev/null
+rustup component add llvm-tools clippy rustfmt >/dev/null
+command -v flip-link >/dev/null 2>&1 || cargo install flip-link --locked --quiet
+if [ "${1:-}" = "--qemu" ] && ! command -v qemu-system-arm >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null
+  else
+    echo "qemu-system-arm missing: run 'sudo apt-get install qemu-system-arm'" >&2
+    exit 1
+  fi
+fi
