@@ -27,6 +27,10 @@ impl CalendarCursor {
         if slot < self.last {
             // A smaller slot means the hyperperiod wrapped (possibly after a jump).
             self.next = 0;
+        } else if calendar.get(self.next).is_some_and(|e| e.slot > slot) {
+            // Fast path of most slots: this node's next entry is still ahead.
+            self.last = slot;
+            return None;
         }
         self.last = slot;
         // Skip entries behind `slot`: each entry is skipped at most once per hyperperiod.

@@ -225,10 +225,13 @@ impl RxState {
             self.first_sof = sof;
             self.crc = CRC16_INIT;
         }
-        // Payload bytes of this fragment (the CRC bytes at the end are not covered).
+        // Payload bytes of this fragment (the CRC bytes at the end are not covered);
+        // single-frame messages carry no CRC, so they skip it.
         let payload_end = (start + data.len()).min(size);
-        if let Some(part) = buf.get(start..payload_end) {
-            self.crc = crc16_update(self.crc, part);
+        if size > 8 {
+            if let Some(part) = buf.get(start..payload_end) {
+                self.crc = crc16_update(self.crc, part);
+            }
         }
         if counter > 0 {
             self.next = Some(counter - 1);
