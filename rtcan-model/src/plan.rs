@@ -208,6 +208,31 @@ pub struct ModuleTables {
     pub master_masks: Vec<u64>,
 }
 
+impl ModuleTables {
+    /// Borrowed view for `rtcan_core::Engine::new` (the simulator owns its tables at run
+    /// time; firmware has them as generated constants).
+    pub fn view(&self) -> rtcan_core::tables::NodeTables<'_> {
+        rtcan_core::tables::NodeTables {
+            bus: self.bus,
+            module: self.module,
+            tx: &self.tx,
+            rx: &self.rx,
+            calendar: &self.calendar,
+            master_masks: &self.master_masks,
+        }
+    }
+
+    /// Bytes of reassembly arena the receive topics need (multi-frame messages carry their
+    /// transfer CRC, `wire_len`).
+    pub fn arena_bytes(&self) -> usize {
+        self.rx
+            .iter()
+            .map(|r| usize::from(r.arena_offset) + wire_len(usize::from(r.size)))
+            .max()
+            .unwrap_or(0)
+    }
+}
+
 impl Plan {
     /// A topic by name.
     pub fn topic(&self, name: &str) -> Option<&TopicPlan> {

@@ -33,14 +33,7 @@ pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
                 t.rx.len()
             ));
         }
-        let ot = OwnedTables {
-            bus: t.bus,
-            module: t.module,
-            tx: t.tx,
-            rx: t.rx,
-            calendar: t.calendar,
-            master_masks: t.master_masks,
-        };
+        let ot: OwnedTables = t;
         if ot.arena_bytes() > SIM_ARENA {
             return Err(format!(
                 "module {} needs {} arena bytes; the simulator holds {SIM_ARENA}",
