@@ -11,60 +11,25 @@ use rtcan_core::{Class, Nanos};
 
 use crate::candump::Entry;
 
-/// Primitive field types (little-endian on the wire, docs/PROTOCOL.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Prim {
-    /// u8.
-    U8,
-    /// u16.
-    U16,
-    /// u32.
-    U32,
-    /// u64.
-    U64,
-    /// i8.
-    I8,
-    /// i16.
-    I16,
-    /// i32.
-    I32,
-    /// i64.
-    I64,
-    /// f32.
-    F32,
-    /// f64.
-    F64,
-    /// bool.
-    Bool,
-}
+/// Field types are the model's (`rtcan_model::Prim`): one definition of the payload layout.
+pub use rtcan_model::Prim;
 
-impl Prim {
-    /// Bytes.
-    pub fn size(self) -> usize {
-        match self {
-            Prim::U8 | Prim::I8 | Prim::Bool => 1,
-            Prim::U16 | Prim::I16 => 2,
-            Prim::U32 | Prim::I32 | Prim::F32 => 4,
-            Prim::U64 | Prim::I64 | Prim::F64 => 8,
-        }
+/// A field value as text (little-endian on the wire, docs/PROTOCOL.md).
+fn render_prim(prim: Prim, b: &[u8]) -> String {
+    let mut a = [0u8; 8];
+    for (d, s) in a.iter_mut().zip(b) {
+        *d = *s;
     }
-
-    fn render(self, b: &[u8]) -> String {
-        let mut a = [0u8; 8];
-        for (d, s) in a.iter_mut().zip(b) {
-            *d = *s;
-        }
-        let u = u64::from_le_bytes(a);
-        match self {
-            Prim::U8 | Prim::U16 | Prim::U32 | Prim::U64 => u.to_string(),
-            Prim::I8 => (u as u8 as i8).to_string(),
-            Prim::I16 => (u as u16 as i16).to_string(),
-            Prim::I32 => (u as u32 as i32).to_string(),
-            Prim::I64 => (u as i64).to_string(),
-            Prim::F32 => f32::from_bits(u as u32).to_string(),
-            Prim::F64 => f64::from_bits(u).to_string(),
-            Prim::Bool => (u != 0).to_string(),
-        }
+    let u = u64::from_le_bytes(a);
+    match prim {
+        Prim::U8 | Prim::U16 | Prim::U32 | Prim::U64 => u.to_string(),
+        Prim::I8 => (u as u8 as i8).to_string(),
+        Prim::I16 => (u as u16 as i16).to_string(),
+        Prim::I32 => (u as u32 as i32).to_string(),
+        Prim::I64 => (u as i64).to_string(),
+        Prim::F32 => f32::from_bits(u as u32).to_string(),
+        Prim::F64 => f64::from_bits(u).to_string(),
+        Prim::Bool => (u != 0).to_string(),
     }
 }
 
@@ -271,7 +236,7 @@ pub fn render(d: &Decoded, cat: &Catalog) -> String {
                         let at = f.offset + k * f.prim.size();
                         payload
                             .get(at..at + f.prim.size())
-                            .map(|b| f.prim.render(b))
+                            .map(|b| render_prim(f.prim, b))
                     })
                     .collect();
                 if f.len.is_some() {
@@ -357,23 +322,6 @@ pub fn scenario_catalog(sc: &crate::run::Scenario) -> Catalog {
     }
 }
 
-fn prim_of(p: rtcan_model::Prim) -> Prim {
-    use rtcan_model::Prim as M;
-    match p {
-        M::U8 => Prim::U8,
-        M::U16 => Prim::U16,
-        M::U32 => Prim::U32,
-        M::U64 => Prim::U64,
-        M::I8 => Prim::I8,
-        M::I16 => Prim::I16,
-        M::I32 => Prim::I32,
-        M::I64 => Prim::I64,
-        M::F32 => Prim::F32,
-        M::F64 => Prim::F64,
-        M::Bool => Prim::Bool,
-    }
-}
-
 /// Catalog of a robot's plan: every topic sent on the bus, with its type's fields.
 pub fn plan_catalog(plan: &rtcan_model::Plan) -> Catalog {
     let topics = plan
@@ -393,7 +341,7 @@ pub fn plan_catalog(plan: &rtcan_model::Plan) -> Catalog {
                         .iter()
                         .map(|f| FieldDesc {
                             name: f.name.clone(),
-                            prim: prim_of(f.ty.prim),
+                            prim: f.ty.prim,
                             len: f.ty.len,
                             offset: f.offset,
                         })
