@@ -141,3 +141,14 @@ impl Meter for KindMeter {
         }
     }
 }
+
+/// Prints one benchmark line in the format `run-qemu.sh` tabulates.
+pub fn report(name: &str, s: &Stat) {
+    cortex_m_semihosting::hprintln!(
+        "BENCH {} max {} mean {} samples {}",
+        name,
+        s.max,
+        s.mean(),
+        s.n
+    );
+}

@@ -12,7 +12,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::hprintln;
 use lm3s6965 as _;
 use rtcan_board_common::WideClock;
-use rtcan_board_qemu::meter::{KindMeter, Stat, SysTickMeter};
+use rtcan_board_qemu::meter::{report, KindMeter, Stat, SysTickMeter};
 use rtcan_board_qemu::robot::{self, master, slave1, slave2};
 use rtcan_board_qemu::test_host::TestHost;
 use rtcan_board_qemu::{check, pass, Node, SoftBus, SoftCan, Station};
@@ -20,16 +20,6 @@ use rtcan_core::driver::{Controller, Mailbox};
 use rtcan_core::fragment::{crc16, fragment_data};
 use rtcan_core::frame::Frame;
 use rtcan_core::id::{CanId, MsgId};
-
-fn report(name: &str, s: &Stat) {
-    hprintln!(
-        "BENCH {} max {} mean {} samples {}",
-        name,
-        s.max,
-        s.mean(),
-        s.n
-    );
-}
 
 #[entry]
 fn main() -> ! {

@@ -9,9 +9,8 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-use cortex_m_semihosting::hprintln;
 use lm3s6965 as _;
-use rtcan_board_qemu::meter::{Stat, SysTickMeter};
+use rtcan_board_qemu::meter::{report, Stat, SysTickMeter};
 use rtcan_board_qemu::{check, pass};
 use rtcan_core::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult};
 use rtcan_core::engine::Engine;
@@ -206,16 +205,6 @@ impl Host for Bench {
         self.delivered += payload.len() as u32;
     }
     fn event(&mut self, _event: Event) {}
-}
-
-fn report(name: &str, s: &Stat) {
-    hprintln!(
-        "BENCH {} max {} mean {} samples {}",
-        name,
-        s.max,
-        s.mean(),
-        s.n
-    );
 }
 
 #[entry]
