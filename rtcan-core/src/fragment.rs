@@ -103,29 +103,37 @@ const fn crc16_table() -> [u16; 256] {
 /// A counter the message does not have, or a payload above `MAX_PAYLOAD`, gives DLC 0 and
 /// zeroed `out` (the engine only asks for fragments of its own topics).
 pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -> u8 {
-    *out = [0; 8];
-    let Some(dlc) = fragment_dlc(payload.len(), counter) else {
+    // This runs on every frame the engine loads (slot handler, TX interrupt): whole
+    // chunks are one 8-byte move, the tail is packed into a word; no variable-size copy
+    // (a `memcpy` call costs more than the rest of this function on Cortex-M3).
+    let len = payload.len();
+    let count = fragment_count(len);
+    if len > MAX_PAYLOAD || counter >= count {
+        *out = [0; 8];
         return 0;
-    };
-    let start = 8 * usize::from(fragment_count(payload.len()) - 1 - counter);
-    let end = start + usize::from(dlc);
-    // This runs in the slot handler on every load: a whole 8-byte chunk is a constant-size
-    // copy (two word moves); a partial one is packed into a word, because a variable-size
-    // copy becomes a `memcpy` call that costs more than the rest of this function.
-    let from_payload = end.min(payload.len()).saturating_sub(start);
-    if let Some(chunk) = payload.get(start..start + 8).filter(|_| from_payload == 8) {
-        out.copy_from_slice(chunk);
-    } else if let Some(src) = payload.get(start..start + from_payload) {
-        *out = pack_le(src).to_le_bytes();
     }
-    // Past the payload come the CRC bytes (only multi-frame messages reach them).
-    let crc = crc.to_le_bytes();
-    for j in start + from_payload..end {
-        if let (Some(slot), Some(&b)) = (out.get_mut(j - start), crc.get(j - payload.len())) {
-            *slot = b;
-        }
+    let start = 8 * usize::from(count - 1 - counter);
+    if let Some(chunk) = payload
+        .get(start..start + 8)
+        .and_then(|c| <&[u8; 8]>::try_from(c).ok())
+    {
+        *out = *chunk;
+        return 8;
     }
-    dlc
+    // Tail: what is left of the payload, then (multi-frame messages) the CRC,
+    // little-endian; a fragment may also start inside the CRC.
+    let rest = payload.get(start..).unwrap_or(&[]);
+    let mut word = pack_le(rest);
+    if len > 8 {
+        word |= match start.checked_sub(len) {
+            None => u64::from(crc)
+                .checked_shl(8 * rest.len() as u32)
+                .unwrap_or(0),
+            Some(k) => u64::from(crc) >> (8 * k.min(2)),
+        };
+    }
+    *out = word.to_le_bytes();
+    (wire_len(len) - start).min(8) as u8
 }
 
 /// Up to 8 bytes as a little-endian word (bytes past the slice are zero).
