@@ -3,7 +3,9 @@
 //! code generator, and expands to the generated items, or to one `compile_error!` per
 //! diagnostic, rendered rustc-style with the robot.toml excerpt.
 //!
-//! ```ignore
+//! Usage (compiled for real in the root crate's `tests/generated.rs` and `tests/ui/`):
+//!
+//! ```text
 //! rtcan::robot!("robot.toml");
 //! rtcan::robot!("robot.toml", kick = crate::pend_can_pump);
 //! ```
