@@ -303,6 +303,13 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
     );
     let accept_all = m.filter_mode == rtcan_model::FilterMode::AcceptAll;
     let is_master = m.is_master;
+    // Backup-master rank, 1 = first to take over (robot.toml `backup_masters` order); 0 = none.
+    let backup_rank = plan
+        .bus
+        .backup_masters
+        .iter()
+        .position(|&b| b == mi)
+        .map_or(0u8, |p| u8::try_from(p + 1).unwrap_or(u8::MAX));
     let doc = format!(
         "Module `{}` (index {}, board {}{}).",
         m.name,
@@ -345,9 +352,13 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             pub const QUEUE_CAPACITY: usize = #queue;
             /// This module's engine.
             pub type Engine<'t> = ::rtcan::core::Engine<'t, RX_COUNT, ARENA_BYTES, QUEUE_CAPACITY>;
-            /// A new engine on [`TABLES`] (`now`: local time).
+            /// Backup-master rank (robot.toml `backup_masters`, 1 = first); 0: not a backup.
+            pub const BACKUP_RANK: u8 = #backup_rank;
+            /// A new engine on [`TABLES`] (`now`: local time), with its backup-master rank.
             pub fn engine(now: ::rtcan::core::Nanos) -> Engine<'static> {
-                ::rtcan::core::Engine::new(TABLES, now)
+                let mut engine = ::rtcan::core::Engine::new(TABLES, now);
+                engine.set_backup(BACKUP_RANK, &super::MASTER_MASKS);
+                engine
             }
             const _: () = ::core::assert!(::rtcan::tables_fit(&TABLES, RX_COUNT, ARENA_BYTES), #mismatch);
             #[doc = #banks_doc]

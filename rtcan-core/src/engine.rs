@@ -279,6 +279,10 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     queue: EdfQueue<Item, Q>,
     in_flight: usize,
     heartbeat_pending: bool,
+    /// Backup master: rank (1 = first to take over) and the hyperperiod's masks.
+    backup: Option<(u8, &'t [u64])>,
+    /// Local time at which this backup takes over mastership (MAX: not pending).
+    promote_at: Nanos,
     rx_state: [RxState; RX],
     arena: [u8; ARENA],
 }
@@ -332,6 +336,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             queue: EdfQueue::new(),
             in_flight: 0,
             heartbeat_pending: false,
+            backup: None,
+            promote_at: Nanos::MAX,
             rx_state: [RxState::default(); RX],
             arena: [0; ARENA],
         }
@@ -341,6 +347,25 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     pub fn try_new(tables: NodeTables<'t>, now: Nanos) -> Result<Self, TablesError> {
         check_tables(&tables, RX, ARENA)?;
         Ok(Self::new(tables, now))
+    }
+
+    /// Makes this slave backup master number `rank` (1 = first) with the masks of the
+    /// hyperperiod (the generated `MASTER_MASKS`, identical for every module of a robot).
+    /// When the sync has been lost (`SYNC_LOSS_CYCLES` cycles without one), backup `rank`
+    /// waits `2 * rank` more cycles — a higher-ranked backup's sync arriving meanwhile
+    /// relocks it as a slave — then becomes master, continuing the cycle numbering so
+    /// that the hyperperiod phase and the slaves' calendars stay valid. Ignored on the
+    /// master, with rank 0 or without masks.
+    pub fn set_backup(&mut self, rank: u8, masks: &'t [u64]) {
+        if !self.master && rank > 0 && !masks.is_empty() {
+            self.backup = Some((rank, masks));
+        }
+    }
+
+    /// True while this module sends the sync frame (the configured master, or a backup
+    /// that took over).
+    pub fn is_master(&self) -> bool {
+        self.master
     }
 
     /// Selects the SRT policy (default `Policy::OURS`).
@@ -375,7 +400,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
         self.abort_overdue(now, can);
         if !self.master && !self.is_synced() {
-            return Nanos::MAX;
+            if now < self.promote_at {
+                return self.promote_at;
+            }
+            self.promote(now, host);
         }
         let slot_ns = self.tables.bus.slot_ns;
         while self.next_boundary <= now {
@@ -393,7 +421,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// The local time `poll` must run next (slot boundary or a window-close abort).
     pub fn next_wakeup(&self) -> Nanos {
         if !self.is_synced() {
-            return Nanos::MAX;
+            // Unsynced: nothing to do before the next sync, or a backup's takeover.
+            return self.promote_at;
         }
         let mut next = self.next_boundary;
         if self.in_flight == 0 {
@@ -509,6 +538,36 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
     }
 
+    /// Backup takeover: this module becomes master one slot from now. The cycle count
+    /// continues from the last cycle it executed (so `abs_cycle mod hyperperiod` and the
+    /// sync counter stay consistent with what slaves knew), on this module's own clock.
+    fn promote(&mut self, now: Nanos, host: &mut impl Host) {
+        let Some((_, masks)) = self.backup else {
+            self.promote_at = Nanos::MAX;
+            return;
+        };
+        let bus = self.tables.bus;
+        let cycle = bus.cycle_ns().max(1);
+        let start_local = now.saturating_add(bus.slot_ns);
+        let elapsed = start_local.saturating_sub(self.pos.start_local);
+        let c0 = self.pos.abs_cycle + elapsed.div_ceil(cycle).max(1);
+        self.master = true;
+        self.tables.master_masks = masks;
+        self.clock = SlotClock::master(&bus, start_local.saturating_sub(c0.saturating_mul(cycle)));
+        self.pos.abs_cycle = c0;
+        self.pos.cycle_in_hyper = (c0 % u64::from(bus.hyperperiod_cycles.max(1))) as u32;
+        self.pos.counter = (c0 % u64::from(bus.cycle_counter_wrap.max(1))) as u32;
+        self.pos.next_slot = 0;
+        self.pos.start_local = start_local;
+        self.pos.start_bus = c0.saturating_mul(cycle);
+        self.pos.slot_q16 = bus.slot_ns << 16;
+        self.pos.inv_q32 = 1 << 32;
+        self.cursor = CalendarCursor::default();
+        self.next_boundary = start_local;
+        self.promote_at = Nanos::MAX;
+        host.event(Event::Synced);
+    }
+
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
     fn next_cycle(&mut self) {
         // Borrow, not copy: `BusConfig` is a dozen words and this runs every cycle.
@@ -570,6 +629,25 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 // next sync frame restarts the slot sequence.
                 self.next_boundary = Nanos::MAX;
                 self.window_end = 0;
+                // Frames still waiting were placed on that clock: withdraw them.
+                for (i, mb) in self.mailboxes.iter_mut().enumerate() {
+                    match mb {
+                        Loaded::Free => {}
+                        Loaded::Window {
+                            abort_requested, ..
+                        } => {
+                            if !*abort_requested {
+                                *abort_requested = true;
+                                can.abort(Mailbox(i as u8));
+                            }
+                        }
+                        _ => can.abort(Mailbox(i as u8)),
+                    }
+                }
+                if let Some((rank, _)) = self.backup {
+                    let wait = 2 * u64::from(rank) * self.tables.bus.cycle_ns();
+                    self.promote_at = self.pos.start_local.saturating_add(wait);
+                }
                 host.event(Event::SyncLost);
                 return;
             }
@@ -874,6 +952,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let was_synced = self.is_synced();
+        // A master's sync (the configured one or a higher-ranked backup) cancels a
+        // pending takeover.
+        self.promote_at = Nanos::MAX;
         if !self.clock.on_sync(sof, sync.cycle) {
             return;
         }

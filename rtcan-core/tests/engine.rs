@@ -666,3 +666,87 @@ fn tables_that_do_not_fit_the_engine_are_rejected() {
     };
     const _: () = assert!(check_tables(&EMPTY, 0, 0).is_ok());
 }
+
+#[test]
+fn backup_master_takes_over_when_the_master_dies() {
+    let (mut bus, p) = paper_bus(3);
+    let masks = p.tables[0].master_masks;
+    bus.nodes[1].engine.set_backup(1, masks);
+    bus.nodes[2].engine.set_backup(2, masks);
+    bus.run(T0 + 10 * 60 * SLOT_NS);
+    bus.nodes[0].alive = false;
+    let cut = bus.now;
+    bus.run(cut + 30 * 60 * SLOT_NS);
+    assert!(bus.nodes[1].engine.is_master(), "backup 1 took over");
+    assert!(
+        !bus.nodes[2].engine.is_master(),
+        "backup 2 relocked on backup 1's sync instead"
+    );
+    assert!(
+        bus.nodes[2]
+            .host
+            .events
+            .iter()
+            .filter(|e| **e == Event::Synced)
+            .count()
+            >= 2
+    );
+    let syncs: Vec<_> = bus
+        .log
+        .iter()
+        .filter(|w| w.node == 1 && w.frame.id().is_sync())
+        .map(|w| w.sof)
+        .collect();
+    assert!(
+        syncs.len() >= 20,
+        "{} syncs from the new master",
+        syncs.len()
+    );
+    // Over the last 10 cycles both survivors send their 13 HRT frames each, in the
+    // slots of their calendars relative to the new master's cycle starts, and every
+    // other frame stays out of reserved slots.
+    let mask = masks[0];
+    for pair in syncs[syncs.len() - 11..].windows(2) {
+        let (start, end) = (pair[0], pair[1]);
+        // The new master's clock (+1000 ppm) now defines bus time: slots in global time
+        // are a sixtieth of its measured cycle.
+        let slot_of = |t: u64| (t - start) * 60 / (end - start);
+        for n in 1..3 {
+            let hrt: Vec<_> = bus
+                .log
+                .iter()
+                .filter(|w| {
+                    w.node == n && w.sof >= start && w.sof < end && w.frame.id().laxity() == 0
+                })
+                .filter(|w| !w.frame.id().is_sync())
+                .collect();
+            assert_eq!(hrt.len(), 13, "node {n} HRT frames in cycle at {start}");
+            for w in hrt {
+                let k = ((w.frame.id().msg_id().0 - 0x140) % 16) as usize;
+                let slot = slot_of(w.sof + 1_000);
+                let phase = p.placements[n * 3 + k].phase_slot as u64;
+                assert_eq!(
+                    slot % PERIODS[k] as u64,
+                    phase % PERIODS[k] as u64,
+                    "node {n} topic {k}"
+                );
+            }
+        }
+        for w in bus
+            .log
+            .iter()
+            .filter(|w| w.sof >= start && w.sof < end && w.frame.id().laxity() != 0)
+        {
+            let s0 = slot_of(w.sof + 1_000);
+            let s1 = slot_of(w.end - 1_000);
+            for s in s0..=s1 {
+                assert_eq!(
+                    mask >> (s % 60) & 1,
+                    0,
+                    "frame {:08X} in reserved slot {s}",
+                    w.frame.id().raw()
+                );
+            }
+        }
+    }
+}
