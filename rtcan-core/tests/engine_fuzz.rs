@@ -122,6 +122,10 @@ fn run(master: bool, events: Vec<Ev>) {
         master_masks: if master { &MASKS } else { &[] },
     };
     let mut e = TestEngine::new(tables, 1_000);
+    if !master {
+        // The slave is also backup master 1, so sync loss leads to takeovers too.
+        e.set_backup(1, &MASKS);
+    }
     let mut can = TestCan::default();
     let mut host = TestHost {
         hrt: vec![Some(vec![9; 20])],
