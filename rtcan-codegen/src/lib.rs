@@ -54,11 +54,16 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
         .iter()
         .enumerate()
         .map(|(i, _)| module::module(plan, i, opts));
+    let module_names: Vec<_> = plan.modules.iter().map(|m| names::ident(&m.name)).collect();
     quote! {
         #(#messages)*
         #topics
         #bus
         #(#modules)*
+        /// Every module's statics back to power-on (`<module>::reset`).
+        pub fn reset() {
+            #(#module_names::reset();)*
+        }
     }
 }
 

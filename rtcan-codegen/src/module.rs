@@ -77,14 +77,7 @@ fn filters(m: &ModulePlan, plan: &Plan) -> (Vec<TokenStream>, Vec<TokenStream>, 
             BankPurpose::Sync => "sync frame".to_string(),
             BankPurpose::Heartbeat => "heartbeats".to_string(),
             BankPurpose::AcceptAll => "everything (software filtering by the RX table)".into(),
-            BankPurpose::Topics(ts) => {
-                let names: Vec<&str> = ts
-                    .iter()
-                    .filter_map(|t| plan.topics.get(*t))
-                    .map(|t| t.name.as_str())
-                    .collect();
-                format!("topics {}", names.join(", "))
-            }
+            BankPurpose::Topics(_) => format!("topics {}", b.purpose.topic_names(plan).join(", ")),
         };
         docs.push_str(&format!("\n{}. {doc}", banks.len()));
         match b.filter {
@@ -191,6 +184,7 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             pub static #c: #alias = ::rtcan::pubsub::Topic::new(::rtcan::pubsub::Remote::#remote, #kick);
         }
     });
+    let topic_statics: Vec<_> = locals.iter().map(|l| names::upper(&l.topic.name)).collect();
     let tx_consts = m.tx.iter().enumerate().filter_map(|(k, ti)| {
         let t = plan.topics.get(*ti)?;
         let c = names::upper(&t.name);
@@ -404,6 +398,16 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
                 });
             /// The nodes whose worst state goes into this module's heartbeat.
             pub static NODES: [&::rtcan::pubsub::Node; #nnodes] = [#(&nodes::#node_refs::NODE),*];
+            /// Every static of this module back to power-on: topics (blocks held by live
+            /// handles stay allocated), system status, node states. For a simulator or a
+            /// test that runs the module more than once in one process.
+            pub fn reset() {
+                #(topics::#topic_statics.reset();)*
+                STATUS.clear();
+                for node in NODES.iter() {
+                    node.reset();
+                }
+            }
             /// The engine's `Host`: dispatches tx/rx indices to this module's topics.
             pub fn host() -> ::rtcan::pubsub::ModuleHost<'static> {
                 ::rtcan::pubsub::ModuleHost::new(&TX_PORTS, &RX_PORTS, &STATUS, &NODES)

@@ -133,12 +133,8 @@ pub fn check_plan(plan: &Plan) -> Result<(), String> {
 }
 
 fn reset_all() {
-    app::reset_gateway();
-    app::reset_motor1();
-    app::reset_motor2();
-    app::reset_motor3();
-    app::reset_proximity();
-    app::reset_psu();
+    // The generated code resets every module's topics, status and nodes.
+    rtcan::robot_toml::reset();
 }
 
 /// Runs the scenario on `plan` (which must be the workspace robot.toml).

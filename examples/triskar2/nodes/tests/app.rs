@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use rtcan::core::driver::{Event, Host};
 use rtcan::pubsub::Message;
 use rtcan::robot_toml as robot;
-use triskar2_nodes::app::{self, Motor3App, MotorHw, ProximityApp, ProximityHw};
+use triskar2_nodes::app::{Motor3App, MotorHw, ProximityApp, ProximityHw};
 
 /// The generated topics are statics: one test at a time.
 static LOCK: Mutex<()> = Mutex::new(());
@@ -42,7 +42,7 @@ fn setpoints(w: [f32; 3]) -> [u8; 12] {
 #[test]
 fn motor3_follows_its_setpoint_and_stops_in_the_safe_state() {
     let _g = LOCK.lock().unwrap_or_else(|p| p.into_inner());
-    app::reset_motor3();
+    rtcan::robot_toml::motor3::reset();
     let mut host = robot::motor3::host();
     let mut a = Motor3App::new();
     let mut hw = Wheel::default();
@@ -75,7 +75,7 @@ fn motor3_follows_its_setpoint_and_stops_in_the_safe_state() {
     host.deliver(0, &setpoints([0.0, 0.0, 10.0]), 15 * MS);
     a.poll(15 * MS, &mut hw);
     assert_eq!(hw.duty, 0.0, "no restart by itself");
-    app::reset_motor3();
+    rtcan::robot_toml::motor3::reset();
     assert_eq!(robot::motor3::topics::ENCODER3.stats().published, 0);
 }
 
@@ -101,7 +101,7 @@ fn teleop(vx: f32) -> [u8; 12] {
 #[test]
 fn proximity_module_limits_the_teleop_command_near_a_wall() {
     let _g = LOCK.lock().unwrap_or_else(|p| p.into_inner());
-    app::reset_proximity();
+    rtcan::robot_toml::proximity::reset();
     let mut host = robot::proximity::host();
     host.event(Event::Synced);
     host.event(Event::Heartbeat {
@@ -126,5 +126,5 @@ fn proximity_module_limits_the_teleop_command_near_a_wall() {
     let before = robot::proximity::topics::VELOCITY.stats().published;
     a.poll(2_000 * MS, &mut Wall(0.8));
     assert_eq!(robot::proximity::topics::VELOCITY.stats().published, before);
-    app::reset_proximity();
+    rtcan::robot_toml::proximity::reset();
 }

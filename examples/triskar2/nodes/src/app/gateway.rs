@@ -76,19 +76,3 @@ impl GatewayApp {
         self.teleop.next()
     }
 }
-
-/// The gateway's statics back to power-on (see `reset_statics`).
-pub fn reset_gateway() {
-    use module::topics as t;
-    super::reset_statics(
-        &module::STATUS,
-        &module::NODES,
-        &[
-            &|| t::TELEOP.reset(),
-            &|| t::ODOMETRY.reset(),
-            &|| t::PROXIMITY.reset(),
-            &|| t::BATTERY.reset(),
-            &|| t::LOG.reset(),
-        ],
-    );
-}

@@ -17,13 +17,10 @@ pub mod motor;
 pub mod proximity;
 pub mod psu;
 
-pub use gateway::{reset_gateway, GatewayApp, GatewayHw};
-pub use motor::{
-    reset_motor1, reset_motor2, reset_motor3, Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw,
-    COUNTS_PER_WHEEL_REV,
-};
-pub use proximity::{reset_proximity, ProximityApp, ProximityHw};
-pub use psu::{reset_psu, PsuApp, PsuHw};
+pub use gateway::{GatewayApp, GatewayHw};
+pub use motor::{Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw, COUNTS_PER_WHEEL_REV};
+pub use proximity::{ProximityApp, ProximityHw};
+pub use psu::{PsuApp, PsuHw};
 
 use crate::kinematics::Twist;
 use crate::Nanos;
@@ -106,19 +103,6 @@ impl AppStats {
             Ok(()) => self.published = self.published.wrapping_add(1),
             Err(_) => self.publish_errors = self.publish_errors.wrapping_add(1),
         }
-    }
-}
-
-/// Returns a module's statics to their power-on state: its topics (queues, bus side,
-/// counters), its `STATUS` and its nodes (Init). Call it only while no engine of the
-/// module runs (the simulator, between two runs in one process).
-pub(crate) fn reset_statics(status: &SystemStatus, nodes: &[&Node], topics: &[&dyn Fn()]) {
-    for t in topics {
-        t();
-    }
-    status.clear();
-    for n in nodes {
-        n.reset();
     }
 }
 

@@ -122,15 +122,3 @@ impl ProximityApp {
         self.ranger_every.next()
     }
 }
-
-/// The proximity module's statics back to power-on (see `reset_statics`).
-pub fn reset_proximity() {
-    use module::topics as t;
-    super::reset_statics(
-        &module::STATUS,
-        &module::NODES,
-        &[&|| t::TELEOP.reset(), &|| t::VELOCITY.reset(), &|| {
-            t::PROXIMITY.reset()
-        }],
-    );
-}

@@ -138,16 +138,6 @@ impl core::fmt::Write for Text {
     }
 }
 
-/// The PSU module's statics back to power-on (see `reset_statics`).
-pub fn reset_psu() {
-    use module::topics as t;
-    super::reset_statics(
-        &module::STATUS,
-        &module::NODES,
-        &[&|| t::BATTERY.reset(), &|| t::LOG.reset()],
-    );
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
