@@ -40,6 +40,21 @@ pub enum BankPurpose {
     AcceptAll,
 }
 
+impl BankPurpose {
+    /// Names of the topics a `Topics` bank passes (empty for the other purposes), for
+    /// reports and generated docs.
+    pub fn topic_names<'p>(&self, plan: &'p crate::Plan) -> Vec<&'p str> {
+        match self {
+            BankPurpose::Topics(ts) => ts
+                .iter()
+                .filter_map(|t| plan.topics.get(*t))
+                .map(|t| t.name.as_str())
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
 /// A configured bank.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Bank {

@@ -241,12 +241,8 @@ fn bank_text(plan: &Plan, f: &FilterBank, p: &BankPurpose) -> String {
         BankPurpose::Sync => "sync".to_string(),
         BankPurpose::Heartbeat => "heartbeats".to_string(),
         BankPurpose::AcceptAll => "accept all".to_string(),
-        BankPurpose::Topics(ts) => {
-            let names: Vec<&str> = ts
-                .iter()
-                .filter_map(|t| plan.topics.get(*t))
-                .map(|t| t.name.as_str())
-                .collect();
+        BankPurpose::Topics(_) => {
+            let names = p.topic_names(plan);
             if names.len() > 3 {
                 format!("{} topics", names.len())
             } else {
