@@ -36,7 +36,13 @@ pub fn run(args: &[String]) -> i32 {
                 return 2;
             }
         },
-        (None, Some("rtcan-paper")) => scenario_catalog(&paper::scenario(paper::our_laxity(), 1.0)),
+        (None, Some("rtcan-paper")) => match paper::scenario(paper::our_laxity(), 1.0) {
+            Ok(sc) => scenario_catalog(&sc),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 2;
+            }
+        },
         _ => {
             eprintln!("error: need --robot or --scenario rtcan-paper\n{USAGE}");
             return 2;

@@ -189,17 +189,17 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
 
 fn run_paper(a: &Args) -> Result<(), String> {
     let t0 = Instant::now();
-    let cmp: Comparison = paper_comparison(&a.cfg);
+    let cmp: Comparison = paper_comparison(&a.cfg)?;
     let wall = t0.elapsed().as_secs_f64();
     let sweep = if a.sweep {
-        paper_sweep(&a.cfg, progress)
+        paper_sweep(&a.cfg, progress)?
     } else {
         Vec::new()
     };
     // Speed of one engine run alone (the figure the README quotes).
     let t1 = Instant::now();
     let c1 = thread_cpu_s();
-    let sc = paper::scenario(paper::our_laxity(), a.cfg.load);
+    let sc = paper::scenario(paper::our_laxity(), a.cfg.load)?;
     let _ = run_engine(
         &sc,
         &SimConfig {

@@ -21,9 +21,9 @@ pub struct Comparison {
 
 /// Runs the paper's benchmark at `cfg.load` under all four policies. The event trace
 /// depends only on the seed and the load, so every policy sees the same events.
-pub fn paper_comparison(cfg: &SimConfig) -> Comparison {
-    let ours_sc = paper::scenario(paper::our_laxity(), cfg.load);
-    let paper_sc = paper::scenario(paper::PAPER_LAXITY, cfg.load);
+pub fn paper_comparison(cfg: &SimConfig) -> Result<Comparison, String> {
+    let ours_sc = paper::scenario(paper::our_laxity(), cfg.load)?;
+    let paper_sc = paper::scenario(paper::PAPER_LAXITY, cfg.load)?;
     let a = run_engine(&paper_sc, cfg, PolicyKind::Paper, Policy::PAPER);
     let b = run_engine(&ours_sc, cfg, PolicyKind::Ours, Policy::OURS);
     let c = run_ideal(&ours_sc, cfg, &b);
@@ -33,12 +33,12 @@ pub fn paper_comparison(cfg: &SimConfig) -> Comparison {
     let span = w.to.saturating_sub(w.from);
     let cap = usable as f64 * span as f64 / hyper.max(1) as f64;
     let offered = offered_ns(&ours_sc, &b.events, w.from, w.to) as f64;
-    Comparison {
+    Ok(Comparison {
         load: cfg.load,
         offered_fraction: if cap > 0.0 { offered / cap } else { 0.0 },
         window_fraction: usable as f64 / hyper.max(1) as f64,
         runs: vec![a, b, c, d],
-    }
+    })
 }
 
 /// On-time SRT deliveries of a run (events − misses over every class).
@@ -77,7 +77,10 @@ pub fn mean_latency_ns(run: &Run) -> f64 {
 
 /// The sweep: loads 0.5, 0.6, …, 1.2 of the scenario's SRT rates; `progress` is told
 /// each finished point.
-pub fn paper_sweep(cfg: &SimConfig, mut progress: impl FnMut(usize, usize)) -> Vec<Comparison> {
+pub fn paper_sweep(
+    cfg: &SimConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Vec<Comparison>, String> {
     let loads: Vec<f64> = (5..=12).map(|k| k as f64 / 10.0).collect();
     let mut out = Vec::new();
     for (i, &load) in loads.iter().enumerate() {
@@ -86,10 +89,10 @@ pub fn paper_sweep(cfg: &SimConfig, mut progress: impl FnMut(usize, usize)) -> V
             record_wire: false,
             ..cfg.clone()
         };
-        out.push(paper_comparison(&c));
+        out.push(paper_comparison(&c)?);
         progress(i + 1, loads.len());
     }
-    out
+    Ok(out)
 }
 
 /// Policy order of `Comparison::runs`.

@@ -1,83 +1,28 @@
-//! The RTCAN paper's §4 benchmark, built by hand: 1 Mbit/s, 10 ms cycle of 60 slots,
-//! three nodes, each with HRT H_A (1 ms), H_B (5 ms), H_C (10 ms) of 8 bytes in the
-//! calendar of the paper's Fig. 3, and SRT 5 × S_A (deadline 10 ms, events every
-//! 10–20 ms, 8 B), 5 × S_B (10 ms, 20–50 ms, 16 B), 5 × S_C (50 ms, 50–100 ms, 20 B).
-use rtcan_core::id::FIRST_TOPIC_MSG_ID;
+//! The RTCAN paper's §4 benchmark: `robots/rtcan-paper.toml` (1 Mbit/s, 10 ms cycle of
+//! 60 slots, three nodes each with HRT H_A 1 ms, H_B 5 ms, H_C 10 ms and 5 × S_A, S_B,
+//! S_C SRT topics, plus a capture module) planned by rtcan-model, with the Table 2 event
+//! periods of `rtcan-sim/scenarios/rtcan-paper.toml`. Every table comes from the model
+//! (the one way tables are made); the only knob is the laxity encoding under comparison,
+//! set in the robot's `[bus]` before planning so the plan (and fingerprint) carries it.
 use rtcan_core::laxity::LaxityEncoding;
-use rtcan_core::sync::cycle_counter_wrap;
-use rtcan_core::tables::{BusConfig, CalEntry, RxTopic, TxTopic};
-use rtcan_core::{Class, MsgId, Nanos};
+use rtcan_core::Nanos;
+use rtcan_model::Plan;
 
-use crate::tables::OwnedTables;
-use crate::traffic::Gen;
+use crate::robot::{expand, parse_user, scenario as plan_scenario, Traffic};
+use crate::run::Scenario;
+use crate::traffic::GenKind;
 
-/// Nodes of the benchmark.
-pub const NODES: usize = 3;
-/// Slots per cycle.
-pub const SLOTS: u8 = 60;
-/// Cycle length asked for, ns (the slot is rounded down to whole ns).
-pub const CYCLE_NS: Nanos = 10_000_000;
+/// The benchmark robot, as shipped.
+pub const ROBOT_TOML: &str = include_str!("../../robots/rtcan-paper.toml");
+/// Its file name in diagnostics and reports.
+pub const ROBOT_FILE: &str = "robots/rtcan-paper.toml";
+/// Table 2 traffic (user-scenario format, docs/SIM.md).
+pub const TRAFFIC_TOML: &str = include_str!("../scenarios/rtcan-paper.toml");
+
 const MS: Nanos = 1_000_000;
 
-/// One SRT class of Table 2.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct SrtClass {
-    /// Name (S_A, S_B, S_C).
-    pub name: &'static str,
-    /// Relative deadline, ns.
-    pub deadline_ns: Nanos,
-    /// Event inter-arrival range, ns.
-    pub every_ns: (Nanos, Nanos),
-    /// Payload bytes.
-    pub size: u16,
-}
-
-/// Table 2.
-pub const SRT_CLASSES: [SrtClass; 3] = [
-    SrtClass {
-        name: "S_A",
-        deadline_ns: 10 * MS,
-        every_ns: (10 * MS, 20 * MS),
-        size: 8,
-    },
-    SrtClass {
-        name: "S_B",
-        deadline_ns: 10 * MS,
-        every_ns: (20 * MS, 50 * MS),
-        size: 16,
-    },
-    SrtClass {
-        name: "S_C",
-        deadline_ns: 50 * MS,
-        every_ns: (50 * MS, 100 * MS),
-        size: 20,
-    },
-];
-/// Messages per class per node.
-pub const PER_CLASS: usize = 5;
-/// HRT names and periods in slots (Table 1 on 60 slots of 1/6 ms): 1 ms, 5 ms, 10 ms.
-pub const HRT: [(&str, u32); 3] = [("H_A", 6), ("H_B", 30), ("H_C", 60)];
-/// First slot of H_A, H_B, H_C of node 0 (Fig. 3); node n is n slots later.
-const HRT_PHASE: [u32; 3] = [1, 4, 10];
-/// Guard before each reserved slot, ns (the paper's 5 µs slot separation).
-pub const GUARD_NS: Nanos = 5_000;
-
-/// Bus parameters with the given laxity encoding.
-pub fn bus_config(laxity: LaxityEncoding) -> BusConfig {
-    BusConfig {
-        bitrate: 1_000_000,
-        slots_per_cycle: SLOTS,
-        slot_ns: CYCLE_NS / Nanos::from(SLOTS),
-        hyperperiod_cycles: 1,
-        cycle_counter_wrap: cycle_counter_wrap(1).unwrap_or(1 << 15),
-        laxity,
-        guard_ns: GUARD_NS,
-        fingerprint: 0x5A5A_2014,
-    }
-}
-
 /// Our encoding: logarithmic, unit chosen so that the longest deadline (50 ms) still
-/// has distinct codes (the plan would choose it the same way from the topics).
+/// has distinct codes; `robots/rtcan-paper.toml` declares exactly this one (tested).
 pub fn our_laxity() -> LaxityEncoding {
     let mut unit = 1_000u32;
     while (LaxityEncoding::Log { unit_ns: unit }).max_laxity_ns() < 50 * MS && unit < 1_000_000 {
@@ -89,144 +34,92 @@ pub fn our_laxity() -> LaxityEncoding {
 /// The paper's encoding as published by the 2014 code: linear, 1 ms per code.
 pub const PAPER_LAXITY: LaxityEncoding = LaxityEncoding::Linear { unit_ns: 1_000_000 };
 
-/// Message ID of topic `t` of node `n`.
-pub fn msg_id(node: usize, topic: usize) -> MsgId {
-    MsgId(FIRST_TOPIC_MSG_ID + (node * 32 + topic) as u16)
+/// The robot text with its `[bus]` laxity set to `laxity`.
+fn robot_text(laxity: LaxityEncoding) -> Result<String, String> {
+    let mut doc: toml_edit::DocumentMut = ROBOT_TOML
+        .parse()
+        .map_err(|e: toml_edit::TomlError| format!("{ROBOT_FILE}: {e}"))?;
+    let bus = doc
+        .get_mut("bus")
+        .and_then(toml_edit::Item::as_table_like_mut)
+        .ok_or_else(|| format!("{ROBOT_FILE}: no [bus] table"))?;
+    let (kind, unit) = match laxity {
+        LaxityEncoding::Linear { unit_ns } => ("linear", unit_ns),
+        LaxityEncoding::Log { unit_ns } => ("log", unit_ns),
+    };
+    bus.insert("laxity", toml_edit::value(kind));
+    bus.insert("laxity_unit", toml_edit::value(format!("{unit}ns")));
+    Ok(doc.to_string())
 }
 
-/// Topic layout of one node: 3 HRT then 5 S_A, 5 S_B, 5 S_C.
-pub fn tx_topics(node: usize) -> Vec<TxTopic> {
-    let mut tx = Vec::new();
-    for (i, _) in HRT.iter().enumerate() {
-        tx.push(TxTopic {
-            msg_id: msg_id(node, i),
-            class: Class::Hrt,
-            size: 8,
-            deadline_ns: 0,
-        });
-    }
-    for c in SRT_CLASSES.iter() {
-        for _ in 0..PER_CLASS {
-            let t = tx.len();
-            tx.push(TxTopic {
-                msg_id: msg_id(node, t),
-                class: Class::Srt,
-                size: c.size,
-                deadline_ns: c.deadline_ns,
-            });
-        }
-    }
-    tx
+/// The plan of the benchmark robot with `laxity`.
+pub fn plan(laxity: LaxityEncoding) -> Result<Plan, String> {
+    let text = robot_text(laxity)?;
+    rtcan_model::Robot::parse(ROBOT_FILE, &text).map_err(|d| d.render())
 }
 
-/// Class name of transmit topic index `t` (same layout on every node).
-pub fn topic_class(t: usize) -> &'static str {
-    match t {
-        0..=2 => HRT.get(t).map_or("?", |h| h.0),
-        _ => SRT_CLASSES.get((t - 3) / PER_CLASS).map_or("?", |c| c.name),
+/// Table 2 traffic on `plan` with event rates scaled by `load` (1.0 = Table 2).
+pub fn traffic(plan: &Plan, load: f64) -> Result<Vec<Traffic>, String> {
+    let user = parse_user(TRAFFIC_TOML, std::path::Path::new("."))?;
+    let mut t = expand(&user, plan)?;
+    let scale = |ns: Nanos| ((ns as f64 / load) as Nanos).max(1);
+    for x in &mut t {
+        x.kind = match x.kind {
+            GenKind::Random { lo, hi } => GenKind::Random {
+                lo: scale(lo),
+                hi: scale(hi),
+            },
+            GenKind::Periodic { period } => GenKind::Periodic {
+                period: scale(period),
+            },
+            GenKind::Hrt => GenKind::Hrt,
+        };
     }
+    Ok(t)
 }
 
-/// Reservation mask of every cycle (Fig. 3): sync slot plus every node's HRT slots.
-pub fn mask() -> u64 {
-    let mut m = 1u64;
-    for n in 0..NODES {
-        for e in calendar(n) {
-            m |= 1 << (e.slot % u32::from(SLOTS));
-        }
-    }
-    m
-}
-
-/// Calendar of node `n` over the one-cycle hyperperiod.
-pub fn calendar(n: usize) -> Vec<CalEntry> {
-    let mut cal = Vec::new();
-    for (i, &(_, period)) in HRT.iter().enumerate() {
-        let mut s = HRT_PHASE.get(i).copied().unwrap_or(1) + n as u32;
-        while s < u32::from(SLOTS) {
-            cal.push(CalEntry {
-                slot: s,
-                tx: i as u8,
-                fragment: 0,
-            });
-            s += period;
-        }
-    }
-    cal.sort_by_key(|e| e.slot);
-    cal
-}
-
-/// Tables of every node; node 0 is the master. Every node subscribes to every topic of
-/// the others (so reassembly runs on real receivers).
-pub fn tables(laxity: LaxityEncoding) -> Vec<OwnedTables> {
-    let bus = bus_config(laxity);
-    (0..NODES)
-        .map(|n| {
-            let mut rx = Vec::new();
-            let mut off = 0u16;
-            for other in (0..NODES).filter(|&o| o != n) {
-                for t in tx_topics(other) {
-                    rx.push(RxTopic {
-                        msg_id: t.msg_id,
-                        size: t.size,
-                        arena_offset: off,
-                    });
-                    off += t.size;
-                }
-            }
-            rx.sort_by_key(|r| r.msg_id);
-            OwnedTables {
-                bus,
-                module: n as u8,
-                tx: tx_topics(n),
-                rx,
-                calendar: calendar(n),
-                master_masks: if n == 0 { vec![mask()] } else { Vec::new() },
-            }
-        })
-        .collect()
-}
-
-/// Traffic generators of node `n`, SRT event rates scaled by `load` (1.0 = Table 2).
-pub fn generators(load: f64) -> Vec<Gen> {
-    let mut g = Vec::new();
-    for (i, _) in HRT.iter().enumerate() {
-        g.push(Gen::hrt(i as u8));
-    }
-    for (c, class) in SRT_CLASSES.iter().enumerate() {
-        for k in 0..PER_CLASS {
-            let tx = (3 + c * PER_CLASS + k) as u8;
-            let lo = (class.every_ns.0 as f64 / load) as Nanos;
-            let hi = (class.every_ns.1 as f64 / load) as Nanos;
-            g.push(Gen::random(tx, lo, hi, usize::from(class.size)));
-        }
-    }
-    g
+/// Report label of a benchmark topic: its name up to the node digit, upper case
+/// (`h_a1` → `H_A`, `s_b2_3` → `S_B`), so figures group by the paper's classes.
+pub fn class_label(name: &str) -> String {
+    name.chars()
+        .take_while(|c| !c.is_ascii_digit())
+        .collect::<String>()
+        .to_ascii_uppercase()
 }
 
 /// The whole scenario at SRT load `load` with the given laxity encoding.
-pub fn scenario(laxity: LaxityEncoding, load: f64) -> crate::run::Scenario {
-    let tables = tables(laxity);
-    let topics = crate::run::topic_infos(
-        &tables,
-        |_, t| topic_class(t).to_string(),
-        |_, t| HRT.get(t).map_or(0, |h| u64::from(h.1)),
-    );
-    crate::run::Scenario {
-        gens: (0..NODES).map(|_| generators(load)).collect(),
-        tables,
-        topics,
-        master: 0,
+pub fn scenario(laxity: LaxityEncoding, load: f64) -> Result<Scenario, String> {
+    let p = plan(laxity)?;
+    let t = traffic(&p, load)?;
+    let mut sc = plan_scenario(&p, &t)?;
+    for i in &mut sc.topics {
+        i.label = class_label(&i.label);
     }
+    Ok(sc)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rtcan_core::fragment::wire_len;
+
+    #[test]
+    fn the_robot_file_declares_our_laxity() {
+        let shipped = rtcan_model::Robot::parse(ROBOT_FILE, ROBOT_TOML).unwrap();
+        assert_eq!(shipped.bus.laxity, our_laxity());
+        assert_eq!(our_laxity(), LaxityEncoding::Log { unit_ns: 61_000 });
+        assert!(our_laxity().max_laxity_ns() >= 50 * MS);
+        // Setting the encoding it already has changes nothing (same fingerprint).
+        assert_eq!(plan(our_laxity()).unwrap().fingerprint, shipped.fingerprint);
+        let p = plan(PAPER_LAXITY).unwrap();
+        assert_eq!(p.bus.laxity, PAPER_LAXITY);
+        assert_ne!(p.fingerprint, shipped.fingerprint);
+    }
 
     #[test]
     fn calendar_matches_fig3() {
-        let m = mask();
+        let p = plan(our_laxity()).unwrap();
+        let m = *p.master_masks.first().unwrap();
         // Fig. 3: slots 0..=15 reserved, 16..=18 free, 19..=21 reserved, 22..=24 free.
         for s in 0..=15 {
             assert!(m & (1 << s) != 0, "slot {s}");
@@ -235,7 +128,7 @@ mod tests {
             assert!(m & (1 << s) == 0, "slot {s}");
         }
         assert_eq!(m.count_ones(), 40, "sync + 3 nodes x 13 HRT slots");
-        let c1 = calendar(1);
+        let c1 = p.tables(1).unwrap().calendar;
         assert_eq!(c1.iter().filter(|e| e.tx == 0).count(), 10);
         assert_eq!(c1.first().map(|e| (e.slot, e.tx)), Some((2, 0)));
         assert!(c1.iter().any(|e| e.slot == 5 && e.tx == 1));
@@ -243,12 +136,56 @@ mod tests {
         assert!(c1.iter().any(|e| e.slot == 11 && e.tx == 2));
     }
 
+    /// The defect of the hand-laid tables (`off += size`): a multi-frame topic's CRC
+    /// bytes landed in the next topic's buffer. The model's buffers are disjoint.
     #[test]
-    fn our_laxity_covers_the_longest_deadline() {
-        assert!(our_laxity().max_laxity_ns() >= 50 * MS);
-        assert_eq!(topic_class(0), "H_A");
-        assert_eq!(topic_class(7), "S_A");
-        assert_eq!(topic_class(8), "S_B");
-        assert_eq!(topic_class(17), "S_C");
+    fn receive_buffers_are_disjoint_and_hold_the_transfer_crc() {
+        let sc = scenario(our_laxity(), 1.0).unwrap();
+        assert_eq!(
+            sc.tables.len(),
+            4,
+            "three benchmark nodes and the capture module"
+        );
+        let capture = sc.tables.get(3).unwrap();
+        assert_eq!(capture.rx.len(), 54);
+        let mut spans: Vec<(usize, usize)> = capture
+            .rx
+            .iter()
+            .map(|r| {
+                let at = usize::from(r.arena_offset);
+                (at, at + wire_len(usize::from(r.size)))
+            })
+            .collect();
+        spans.sort_unstable();
+        for w in spans.windows(2) {
+            assert!(w[0].1 <= w[1].0, "overlap {:?} {:?}", w[0], w[1]);
+        }
+    }
+
+    #[test]
+    fn labels_and_traffic_follow_table2() {
+        assert_eq!(class_label("h_a1"), "H_A");
+        assert_eq!(class_label("s_c3_5"), "S_C");
+        let p = plan(our_laxity()).unwrap();
+        let t = traffic(&p, 2.0).unwrap();
+        assert_eq!(t.len(), 45);
+        let sa = t.iter().find(|x| x.topic == "s_a2_4").unwrap();
+        assert_eq!(
+            sa.kind,
+            GenKind::Random {
+                lo: 5 * MS,
+                hi: 10 * MS
+            }
+        );
+        let sc = scenario(our_laxity(), 1.0).unwrap();
+        let labels: Vec<&str> = sc
+            .topics
+            .iter()
+            .filter(|i| i.node == 1)
+            .map(|i| i.label.as_str())
+            .collect();
+        assert_eq!(labels.len(), 18);
+        assert_eq!(&labels[..4], ["H_A", "H_B", "H_C", "S_A"]);
+        assert_eq!(labels[17], "S_C");
     }
 }

@@ -14,7 +14,7 @@ fn log(seed: u64) -> String {
         seed,
         ..SimConfig::default()
     };
-    let sc = paper::scenario(paper::our_laxity(), 1.0);
+    let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
     candump::log(
         &run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).wire,
         "can0",
@@ -36,7 +36,7 @@ fn decode_reassembles_every_sent_message_of_a_sim_log() {
         seed: 3,
         ..SimConfig::default()
     };
-    let sc = paper::scenario(paper::our_laxity(), 1.0);
+    let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
     let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS);
     let text = candump::log(&run.wire, "can0");
     let entries = candump::parse(&text).unwrap();
@@ -65,7 +65,9 @@ fn decode_reassembles_every_sent_message_of_a_sim_log() {
                 );
             }
             Decoded::Sync { .. } => syncs += 1,
-            Decoded::Heartbeat { fingerprint, .. } => assert_eq!(*fingerprint, 0x5A5A_2014),
+            Decoded::Heartbeat { fingerprint, .. } => {
+                assert_eq!(*fingerprint, sc.tables[0].bus.fingerprint)
+            }
             Decoded::Unattributed { why, .. } => {
                 // Only transfers the sender dropped half-way (deadline) may be left over.
                 assert_eq!(why, "unfinished transfer discarded", "{}", render(d, &cat));
@@ -98,7 +100,7 @@ fn decode_reassembles_every_sent_message_of_a_sim_log() {
 
 #[test]
 fn decode_reports_frames_it_cannot_attribute() {
-    let sc = paper::scenario(paper::our_laxity(), 1.0);
+    let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
     let cat = scenario_catalog(&sc);
     let text = "(0.000100) can0 00FFFF80#01\n(0.000200) can0 123#00\n";
     let out = decode(&candump::parse(text).unwrap(), &cat);

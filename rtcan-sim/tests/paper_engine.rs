@@ -11,7 +11,7 @@ fn paper_hrt_never_misses_and_never_overlaps() {
         seconds: 0.5,
         ..SimConfig::default()
     };
-    let sc = paper::scenario(paper::our_laxity(), 1.0);
+    let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
     let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS);
     for h in &run.figures.hrt {
         eprintln!(
@@ -61,7 +61,7 @@ fn four_policies_on_one_trace() {
         seconds: 1.0,
         ..SimConfig::default()
     };
-    let c = rtcan_sim::compare::paper_comparison(&cfg);
+    let c = rtcan_sim::compare::paper_comparison(&cfg).unwrap();
     eprintln!("{}", rtcan_sim::report::comparison_text(&c));
     for r in &c.runs {
         eprintln!("{}", rtcan_sim::report::text(r));

@@ -1,7 +1,6 @@
-//! Scenarios from a robot.toml plan, cross-checked against the hand-built paper tables.
+//! Scenarios from a robot.toml plan.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 use rtcan_core::engine::Policy;
-use rtcan_sim::paper;
 use rtcan_sim::policy::PolicyKind;
 use rtcan_sim::run::{run_engine, SimConfig};
 
@@ -10,26 +9,6 @@ fn plan() -> rtcan_model::Plan {
     rtcan_model::Robot::load(path)
         .map_err(|d| d.render())
         .unwrap()
-}
-
-#[test]
-fn plan_of_rtcan_paper_toml_reserves_the_hand_built_slots() {
-    let p = plan();
-    let masks = &p.master_masks;
-    eprintln!(
-        "plan masks {:x?} hand {:x} slot {} laxity {:?}",
-        masks,
-        paper::mask(),
-        p.bus.slot_ns,
-        p.bus.laxity
-    );
-    assert!(masks
-        .iter()
-        .all(|&m| m.count_ones() == paper::mask().count_ones()));
-    assert_eq!(
-        p.bus.slot_ns,
-        paper::bus_config(paper::our_laxity()).slot_ns
-    );
 }
 
 #[test]
