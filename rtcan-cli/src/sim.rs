@@ -1,96 +1,159 @@
-//! `rtcan sim`: runs a scenario on the simulated bus and reports (docs/SIM.md).
+//! `rtcan sim`: parses the command line, runs `rtcan_sim::session::run` and prints its
+//! report (docs/SIM.md).
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
-use rtcan_core::engine::Policy;
-use rtcan_sim::compare::{paper_comparison, paper_sweep, Comparison};
 use rtcan_sim::policy::PolicyKind;
-use rtcan_sim::run::{run_engine, Run, Scenario, SimConfig};
-use rtcan_sim::triskar::{self, report as triskar_report, TriskarConfig};
-use rtcan_sim::{candump, paper, report, robot, svg};
+use rtcan_sim::run::{Run, Scenario, SimConfig};
+use rtcan_sim::session::{self, built_in_list, Report, Request, Speed, Which};
+use rtcan_sim::triskar::report as triskar_report;
+use rtcan_sim::{candump, report, svg};
 
-const USAGE: &str = "usage: rtcan sim [robot.toml] [--scenario triskar2|rtcan-paper|file.toml] [--seconds N] [--seed S]
-                 [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]";
+const SYNOPSIS: &str =
+    "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N]
+                 [--seed S] [--load X] [--ber P] [--json] [--out DIR] [--sweep]
+                 [--master-dies-at S]
+       rtcan sim --help";
 
+const OPTIONS: &str =
+    "  robot.toml          the robot (default ./robot.toml): the workspace robot runs triskar2,
+                      any other robot its generic traffic scenario
+  --scenario NAME     a built-in scenario or a scenario file (docs/SIM.md)
+  --seconds N         simulated time, 0 < N <= 100000 (triskar2 default 10, others 1)
+  --seed S            seed of every random stream
+  --load X            SRT event-rate scale, 0 < X <= 100
+  --ber P             bit error rate, 0 <= P < 1
+  --json              the report as JSON on stdout
+  --out DIR           write candump log, SVG plots and report.json to DIR
+  --sweep             rtcan-paper: add the load sweep 0.5..1.2
+  --master-dies-at S  triskar2: the bus master stops at S seconds (S >= 0)";
+
+/// Parsed command line.
+#[derive(Debug)]
 struct Args {
-    robot: Option<PathBuf>,
-    scenario: Option<String>,
-    cfg: SimConfig,
+    req: Request,
     json: bool,
     out: Option<PathBuf>,
-    sweep: bool,
-    seconds_given: bool,
-    master_dies_at: Option<f64>,
 }
 
-fn parse(args: &[String]) -> Result<Args, String> {
-    let mut a = Args {
-        robot: None,
-        scenario: None,
-        cfg: SimConfig::default(),
-        json: false,
-        out: None,
-        sweep: false,
-        seconds_given: false,
-        master_dies_at: None,
-    };
+/// `Ok(None)`: help was asked for.
+fn parse(args: &[String]) -> Result<Option<Args>, String> {
+    let mut robot: Option<PathBuf> = None;
+    let mut scenario: Option<String> = None;
+    let mut cfg = SimConfig::default();
+    let (mut json, mut sweep, mut seconds_given) = (false, false, false);
+    let mut out = None;
+    let mut master_dies_at = None;
     let mut it = args.iter();
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
         match arg.as_str() {
-            "--scenario" => a.scenario = Some(value("--scenario")?),
+            "-h" | "--help" => return Ok(None),
+            "--scenario" => scenario = Some(value("--scenario")?),
             "--seconds" => {
-                a.cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?;
-                a.seconds_given = true;
+                cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?;
+                seconds_given = true;
             }
             "--master-dies-at" => {
-                a.master_dies_at = Some(
-                    value("--master-dies-at")?
-                        .parse()
-                        .map_err(|_| "bad --master-dies-at")?,
-                )
+                let v: f64 = value("--master-dies-at")?
+                    .parse()
+                    .map_err(|_| "bad --master-dies-at")?;
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(format!(
+                        "--master-dies-at must be a time in seconds >= 0, not {v}"
+                    ));
+                }
+                master_dies_at = Some(v);
             }
-            "--seed" => a.cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
-            "--load" => a.cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
-            "--ber" => a.cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
-            "--out" => a.out = Some(PathBuf::from(value("--out")?)),
-            "--json" => a.json = true,
-            "--sweep" => a.sweep = true,
-            s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
-            s => a.robot = Some(PathBuf::from(s)),
+            "--seed" => cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
+            "--load" => cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
+            "--ber" => cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
+            "--out" => out = Some(PathBuf::from(value("--out")?)),
+            "--json" => json = true,
+            "--sweep" => sweep = true,
+            s if s.starts_with('-') && s.len() > 1 => return Err(format!("unknown option `{s}`")),
+            s => {
+                if let Some(first) = &robot {
+                    return Err(format!(
+                        "two robot paths, `{}` and `{s}`: give one",
+                        first.display()
+                    ));
+                }
+                robot = Some(PathBuf::from(s));
+            }
         }
     }
-    if !(a.cfg.seconds > 0.0 && a.cfg.seconds <= 100_000.0) {
+    if !(cfg.seconds > 0.0 && cfg.seconds <= 100_000.0) {
         return Err("--seconds must be in (0, 100000]".into());
     }
-    if !(a.cfg.load > 0.0 && a.cfg.load <= 100.0) {
+    if !(cfg.load > 0.0 && cfg.load <= 100.0) {
         return Err("--load must be in (0, 100]".into());
     }
-    if !(0.0..1.0).contains(&a.cfg.bit_error_rate) {
+    if !(0.0..1.0).contains(&cfg.bit_error_rate) {
         return Err("--ber must be in [0, 1)".into());
     }
-    Ok(a)
+    let which = session::resolve(robot, scenario.as_deref())?;
+    if master_dies_at.is_some() && !matches!(which, Which::Triskar { .. }) {
+        return Err("--master-dies-at is supported by the triskar2 scenario only".into());
+    }
+    Ok(Some(Args {
+        req: Request {
+            which,
+            cfg,
+            seconds_given,
+            sweep,
+            master_dies_at,
+        },
+        json,
+        out,
+    }))
+}
+
+/// Writes to stdout; a closed pipe (`| head`) ends the output quietly.
+fn emit(text: &str) {
+    let mut o = std::io::stdout().lock();
+    let _ = o.write_all(text.as_bytes()).and_then(|()| o.flush());
+}
+
+/// Creates `dir` and proves it writable before the run, so a bad `--out` fails at once.
+fn prepare_out(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("--out {}: {e}", dir.display()))?;
+    let probe = dir.join(".rtcan-sim-write-test");
+    std::fs::write(&probe, b"").map_err(|e| format!("--out {}: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 /// Runs `rtcan sim`; returns the exit code.
 pub fn run(args: &[String]) -> i32 {
     let a = match parse(args) {
-        Ok(a) => a,
+        Ok(Some(a)) => a,
+        Ok(None) => {
+            emit(&format!(
+                "{SYNOPSIS}\n\n{OPTIONS}\n\nbuilt-in scenarios:\n{}\n",
+                built_in_list()
+            ));
+            return 0;
+        }
         Err(e) => {
-            eprintln!("error: {e}\n{USAGE}");
+            eprintln!("error: {e}\n{SYNOPSIS}");
             return 2;
         }
     };
-    let default_robot = PathBuf::from("robot.toml");
-    let result = match (a.scenario.as_deref(), &a.robot) {
-        (Some("rtcan-paper"), _) => run_paper(&a),
-        (Some("triskar2"), robot) => {
-            run_triskar(&a, robot.as_ref().unwrap_or(&default_robot), true)
+    if let Some(dir) = &a.out {
+        if let Err(e) = prepare_out(dir) {
+            eprintln!("error: {e}");
+            return 2;
         }
-        (Some(file), _) => run_user_file(&a, Path::new(file)),
-        (None, robot) => run_triskar(&a, robot.as_ref().unwrap_or(&default_robot), false),
+    }
+    let rep = match session::run(&a.req, &mut progress) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
     };
-    match result {
+    match print_and_write(&a, &rep) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -100,7 +163,6 @@ pub fn run(args: &[String]) -> i32 {
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let p = dir.join(name);
     std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
 }
@@ -118,26 +180,20 @@ fn progress(done: usize, total: usize) {
     }
 }
 
-fn speed_line(sim_s: f64, wall: f64, cpu: Option<f64>) -> String {
-    let mut s = format!(
-        "speed: {sim_s:.1} s simulated in {wall:.3} s wall = {:.0}x real time",
-        sim_s / wall.max(1e-9)
+fn speed_line(s: &Speed) -> String {
+    let mut t = format!(
+        "speed: {:.1} s simulated in {:.3} s wall = {:.0}x real time",
+        s.sim_s,
+        s.wall_s,
+        s.sim_s / s.wall_s.max(1e-9)
     );
-    if let Some(cpu) = cpu {
-        s.push_str(&format!(
+    if let Some(cpu) = s.cpu_s {
+        t.push_str(&format!(
             "; {cpu:.3} s on CPU = {:.0}x real time per core",
-            sim_s / cpu.max(1e-9)
+            s.sim_s / cpu.max(1e-9)
         ));
     }
-    s
-}
-
-/// CPU time of this thread (Linux schedstat), so the speed figure does not depend on
-/// what else the machine runs.
-fn thread_cpu_s() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
-    Some(ns / 1e9)
+    t
 }
 
 fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
@@ -187,189 +243,175 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
     Ok(())
 }
 
-fn run_paper(a: &Args) -> Result<(), String> {
-    let t0 = Instant::now();
-    let cmp: Comparison = paper_comparison(&a.cfg)?;
-    let wall = t0.elapsed().as_secs_f64();
-    let sweep = if a.sweep {
-        paper_sweep(&a.cfg, progress)?
-    } else {
-        Vec::new()
-    };
-    // Speed of one engine run alone (the figure the README quotes).
-    let t1 = Instant::now();
-    let c1 = thread_cpu_s();
-    let sc = paper::scenario(paper::our_laxity(), a.cfg.load)?;
-    let _ = run_engine(
-        &sc,
-        &SimConfig {
-            record_wire: false,
-            ..a.cfg.clone()
-        },
-        PolicyKind::Ours,
-        Policy::OURS,
-    );
-    let one = t1.elapsed().as_secs_f64();
-    let cpu = thread_cpu_s().zip(c1).map(|(b, a)| b - a);
-    if a.json {
-        let pts: Vec<String> = sweep.iter().map(report::comparison_json).collect();
-        println!(
-            "{{\"scenario\":\"rtcan-paper\",\"seconds\":{},\"seed\":{},\"comparison\":{},\"sweep\":[{}],\"speed_x_real_time\":{:.1}}}",
-            a.cfg.seconds,
-            a.cfg.seed,
-            report::comparison_json(&cmp),
-            pts.join(","),
-            a.cfg.seconds / cpu.unwrap_or(one).max(1e-9)
-        );
-    } else {
-        println!(
-            "rtcan-paper: {} s simulated, seed {}\n",
-            a.cfg.seconds, a.cfg.seed
-        );
-        print!("{}", report::comparison_text(&cmp));
-        for r in &cmp.runs {
-            println!();
-            print!("{}", report::text(r));
+fn json_str(s: &str) -> String {
+    s.replace('\\', "\\\\").replace('"', "\\\"")
+}
+
+fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
+    let cfg = &a.req.cfg;
+    match rep {
+        Report::Paper {
+            comparison,
+            sweep,
+            scenario,
+            speed,
+            all_wall_s,
+        } => {
+            if a.json {
+                let pts: Vec<String> = sweep.iter().map(report::comparison_json).collect();
+                emit(&format!(
+                    "{{\"scenario\":\"rtcan-paper\",\"seconds\":{},\"seed\":{},\"comparison\":{},\"sweep\":[{}],\"speed_x_real_time\":{:.1}}}\n",
+                    cfg.seconds,
+                    cfg.seed,
+                    report::comparison_json(comparison),
+                    pts.join(","),
+                    speed.x_real_time()
+                ));
+            } else {
+                let mut t = format!(
+                    "rtcan-paper: {} s simulated, seed {}\n\n",
+                    cfg.seconds, cfg.seed
+                );
+                t.push_str(&report::comparison_text(comparison));
+                for r in &comparison.runs {
+                    t.push('\n');
+                    t.push_str(&report::text(r));
+                }
+                for c in sweep {
+                    t.push('\n');
+                    t.push_str(&report::comparison_text(c));
+                }
+                t.push_str(&format!(
+                    "\n{}\n(all four policies: {all_wall_s:.3} s wall)\n",
+                    speed_line(speed)
+                ));
+                emit(&t);
+            }
+            if let Some(dir) = &a.out {
+                let runs = &comparison.runs;
+                if let Some(ours) = runs.iter().find(|r| r.policy == PolicyKind::Ours.name()) {
+                    outputs(dir, scenario, ours)?;
+                }
+                for r in runs.iter().filter(|r| r.policy != PolicyKind::Ours.name()) {
+                    write(
+                        dir,
+                        &format!("srt-latency-{}.svg", r.policy),
+                        &svg::srt_latency(r),
+                    )?;
+                }
+                if let Some(r) = runs
+                    .iter()
+                    .find(|r| r.policy == PolicyKind::FixedPriority.name())
+                {
+                    write(
+                        dir,
+                        &format!("hrt-jitter-{}.svg", r.policy),
+                        &svg::hrt_jitter(r),
+                    )?;
+                }
+                if !sweep.is_empty() {
+                    let (miss, lat) = svg::sweep(sweep);
+                    write(dir, "sweep-miss.svg", &miss)?;
+                    write(dir, "sweep-latency.svg", &lat)?;
+                }
+                write(dir, "report.json", &report::comparison_json(comparison))?;
+            }
         }
-        for c in &sweep {
-            println!();
-            print!("{}", report::comparison_text(c));
+        Report::Robot {
+            file,
+            scenario,
+            run,
+            speed,
+            notes,
+        } => {
+            for n in notes {
+                eprintln!("note: {}", n.replace('\n', "\nnote: "));
+            }
+            if a.json {
+                emit(&format!(
+                    "{{\"robot\":\"{}\",\"seconds\":{},\"seed\":{},\"run\":{},\"speed_x_real_time\":{:.1}}}\n",
+                    json_str(file),
+                    cfg.seconds,
+                    cfg.seed,
+                    report::run_json(run),
+                    speed.x_real_time()
+                ));
+            } else {
+                emit(&format!(
+                    "{file}: {} s simulated, seed {}\n\n{}{}\n",
+                    cfg.seconds,
+                    cfg.seed,
+                    report::text(run),
+                    speed_line(speed)
+                ));
+            }
+            if let Some(dir) = &a.out {
+                outputs(dir, scenario, run)?;
+                write(dir, "report.json", &report::run_json(run))?;
+            }
         }
-        println!();
-        println!("{}", speed_line(a.cfg.seconds, one, cpu));
-        println!("(all four policies: {wall:.3} s wall)");
+        Report::Triskar {
+            file,
+            result,
+            scenario,
+            cfg,
+            speed,
+        } => {
+            let x = speed.x_real_time();
+            if a.json {
+                emit(&format!("{}\n", triskar_report::triskar_json(result, x)));
+            } else {
+                emit(&format!(
+                    "triskar2 on {file}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n\n{}\n{}\n",
+                    cfg.seconds,
+                    cfg.seed,
+                    triskar_report::triskar_text(result),
+                    speed_line(speed)
+                ));
+            }
+            if let Some(dir) = &a.out {
+                outputs(dir, scenario, &result.run)?;
+                write(dir, "path.svg", &triskar_report::path_svg(result))?;
+                write(dir, "report.json", &triskar_report::triskar_json(result, x))?;
+            }
+        }
     }
-    if let Some(dir) = &a.out {
-        if let Some(ours) = cmp
-            .runs
-            .iter()
-            .find(|r| r.policy == PolicyKind::Ours.name())
-        {
-            outputs(dir, &sc, ours)?;
-        }
-        for r in cmp
-            .runs
-            .iter()
-            .filter(|r| r.policy != PolicyKind::Ours.name())
-        {
-            write(
-                dir,
-                &format!("srt-latency-{}.svg", r.policy),
-                &svg::srt_latency(r),
-            )?;
-        }
-        if let Some(r) = cmp
-            .runs
-            .iter()
-            .find(|r| r.policy == PolicyKind::FixedPriority.name())
-        {
-            write(
-                dir,
-                &format!("hrt-jitter-{}.svg", r.policy),
-                &svg::hrt_jitter(r),
-            )?;
-        }
-        if !sweep.is_empty() {
-            let (miss, lat) = svg::sweep(&sweep);
-            write(dir, "sweep-miss.svg", &miss)?;
-            write(dir, "sweep-latency.svg", &lat)?;
-        }
-        write(dir, "report.json", &report::comparison_json(&cmp))?;
-        if !a.json {
-            println!("wrote {}", dir.display());
-        }
+    if let (Some(dir), false) = (&a.out, a.json) {
+        emit(&format!("wrote {}\n", dir.display()));
     }
     Ok(())
 }
 
-fn run_user_file(a: &Args, file: &Path) -> Result<(), String> {
-    let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
-    let user = robot::parse_user(&text, file.parent().unwrap_or(Path::new(".")))?;
-    let plan = rtcan_model::Robot::load(&user.robot).map_err(|d| d.render())?;
-    let traffic = robot::expand(&user, &plan)?;
-    run_plan(a, &plan, &traffic)
-}
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::panic)]
+mod tests {
+    use super::*;
 
-fn run_plan(a: &Args, plan: &rtcan_model::Plan, traffic: &[robot::Traffic]) -> Result<(), String> {
-    let sc = robot::scenario(plan, traffic)?;
-    let t0 = Instant::now();
-    let c0 = thread_cpu_s();
-    let run = run_engine(&sc, &a.cfg, PolicyKind::Ours, Policy::OURS);
-    let wall = t0.elapsed().as_secs_f64();
-    let cpu = thread_cpu_s().zip(c0).map(|(b, a)| b - a);
-    if a.json {
-        println!(
-            "{{\"robot\":\"{}\",\"seconds\":{},\"seed\":{},\"run\":{},\"speed_x_real_time\":{:.1}}}",
-            plan.file.replace('\\', "\\\\").replace('"', "\\\""),
-            a.cfg.seconds,
-            a.cfg.seed,
-            report::run_json(&run),
-            a.cfg.seconds / cpu.unwrap_or(wall).max(1e-9)
-        );
-    } else {
-        println!(
-            "{}: {} s simulated, seed {}\n",
-            plan.file, a.cfg.seconds, a.cfg.seed
-        );
-        print!("{}", report::text(&run));
-        println!("{}", speed_line(a.cfg.seconds, wall, cpu));
+    fn args(s: &str) -> Vec<String> {
+        s.split_whitespace().map(String::from).collect()
     }
-    if let Some(dir) = &a.out {
-        outputs(dir, &sc, &run)?;
-        write(dir, "report.json", &report::run_json(&run))?;
-    }
-    Ok(())
-}
 
-/// The triskar2 scenario on `path`, which must be the robot the simulator's code was
-/// generated from (the workspace robot.toml). Any other robot runs the generic traffic
-/// scenario instead, unless triskar2 was asked for explicitly.
-fn run_triskar(a: &Args, path: &Path, explicit: bool) -> Result<(), String> {
-    let plan = rtcan_model::Robot::load(path).map_err(|d| d.render())?;
-    if let Err(why) = triskar::check_plan(&plan) {
-        if explicit {
-            return Err(format!("triskar2: {why}"));
+    #[test]
+    fn parse_rejects_what_it_cannot_honour() {
+        assert!(parse(&args("--help")).unwrap().is_none());
+        assert!(parse(&args("robot.toml -h")).unwrap().is_none());
+        let e = parse(&args("a.toml b.toml")).unwrap_err();
+        assert!(e.contains("two robot paths"), "{e}");
+        for v in ["-1", "NaN", "inf"] {
+            let e = parse(&args(&format!("--master-dies-at {v}"))).unwrap_err();
+            assert!(e.contains("--master-dies-at"), "{v}: {e}");
         }
-        eprintln!(
-            "note: {why}.\nnote: the triskar2 scenario (plants, node code) runs only the workspace robot; \
-             running the generic traffic scenario of {} instead (HRT always fresh, SRT/NRT at their declared rates).",
-            plan.file
+        let e = parse(&args("--scenario rtcan_paper")).unwrap_err();
+        assert!(
+            e.contains("unknown scenario") && e.contains("rtcan-paper"),
+            "{e}"
         );
-        return run_plan(a, &plan, &[]);
+        let e = parse(&args("--scenario rtcan-paper --master-dies-at 1")).unwrap_err();
+        assert!(e.contains("triskar2 scenario only"), "{e}");
+        let ok = parse(&args("--scenario rtcan-paper --seconds 2"))
+            .unwrap()
+            .unwrap();
+        assert_eq!(ok.req.which, Which::Paper);
+        assert!(ok.req.seconds_given);
     }
-    let mut cfg = TriskarConfig {
-        sim: a.cfg.clone(),
-        gateway_dies_at_s: a.master_dies_at,
-        ..TriskarConfig::default()
-    };
-    if !a.seconds_given {
-        cfg.sim.seconds = TriskarConfig::default().sim.seconds;
-    }
-    let t0 = Instant::now();
-    let c0 = thread_cpu_s();
-    let r = triskar::run(&plan, &cfg)?;
-    let wall = t0.elapsed().as_secs_f64();
-    let cpu = thread_cpu_s().zip(c0).map(|(b, a)| b - a);
-    let speed = cfg.sim.seconds / cpu.unwrap_or(wall).max(1e-9);
-    if a.json {
-        println!("{}", triskar_report::triskar_json(&r, speed));
-    } else {
-        println!(
-            "triskar2 on {}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n",
-            plan.file, cfg.sim.seconds, cfg.sim.seed
-        );
-        print!("{}", triskar_report::triskar_text(&r));
-        println!();
-        println!("{}", speed_line(cfg.sim.seconds, wall, cpu));
-    }
-    if let Some(dir) = &a.out {
-        let sc = robot::scenario(&plan, &[])?;
-        outputs(dir, &sc, &r.run)?;
-        write(dir, "path.svg", &triskar_report::path_svg(&r))?;
-        write(dir, "report.json", &triskar_report::triskar_json(&r, speed))?;
-        if !a.json {
-            println!("wrote {}", dir.display());
-        }
-    }
-    Ok(())
 }

@@ -24,10 +24,10 @@ pub struct Comparison {
 pub fn paper_comparison(cfg: &SimConfig) -> Result<Comparison, String> {
     let ours_sc = paper::scenario(paper::our_laxity(), cfg.load)?;
     let paper_sc = paper::scenario(paper::PAPER_LAXITY, cfg.load)?;
-    let a = run_engine(&paper_sc, cfg, PolicyKind::Paper, Policy::PAPER);
-    let b = run_engine(&ours_sc, cfg, PolicyKind::Ours, Policy::OURS);
+    let a = run_engine(&paper_sc, cfg, PolicyKind::Paper, Policy::PAPER)?;
+    let b = run_engine(&ours_sc, cfg, PolicyKind::Ours, Policy::OURS)?;
     let c = run_ideal(&ours_sc, cfg, &b);
-    let d = run_fixed(&ours_sc, cfg);
+    let d = run_fixed(&ours_sc, cfg)?;
     let w = window(cfg);
     let (usable, hyper) = window_capacity(&ours_sc);
     let span = w.to.saturating_sub(w.from);

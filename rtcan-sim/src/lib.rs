@@ -27,6 +27,7 @@ pub mod report;
 pub mod rng;
 pub mod robot;
 pub mod run;
+pub mod session;
 pub mod slots;
 pub mod svg;
 pub mod tables;

@@ -6,7 +6,7 @@ use rtcan_model::Plan;
 
 use crate::run::{topic_infos, Scenario};
 use crate::tables::OwnedTables;
-use crate::traffic::{Gen, GenKind, SIM_ARENA, SIM_RX, WARMUP_NS};
+use crate::traffic::{tier, Gen, GenKind, TIERS, WARMUP_NS};
 
 /// A traffic override for one topic (by name).
 #[derive(Clone, Debug, PartialEq)]
@@ -20,25 +20,45 @@ pub struct Traffic {
 /// Builds the scenario of `plan`; `traffic` overrides declared rates per topic. Topics
 /// without a rate and without an override send nothing.
 pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
+    let by_name: std::collections::HashMap<&str, &rtcan_model::TopicPlan> =
+        plan.topics.iter().map(|t| (t.name.as_str(), t)).collect();
+    let mut kinds: std::collections::HashMap<&str, GenKind> = std::collections::HashMap::new();
+    for t in traffic {
+        match by_name.get(t.topic.as_str()) {
+            None => return Err(format!("traffic for unknown topic `{}`", t.topic)),
+            Some(p) if p.class == Class::Hrt => {
+                return Err(format!(
+                    "traffic for HRT topic `{}`: HRT topics send a fresh sample in every calendar slot; traffic applies to SRT and NRT topics",
+                    t.topic
+                ))
+            }
+            Some(_) => {
+                kinds.insert(t.topic.as_str(), t.kind);
+            }
+        }
+    }
     let mut tables = Vec::new();
     let mut gens = Vec::new();
     for (i, m) in plan.modules.iter().enumerate() {
         let t = plan
             .tables(i)
             .ok_or_else(|| format!("no tables for module {}", m.name))?;
-        if t.rx.len() > SIM_RX {
+        let ot: OwnedTables = t;
+        if tier(&ot).is_none() {
             return Err(format!(
-                "module {} receives {} topics; the simulator holds {SIM_RX}",
+                "module {} receives {} topics in {} arena bytes; the simulator holds at most {} topics and {} bytes",
                 m.name,
-                t.rx.len()
+                ot.rx.len(),
+                ot.arena_bytes(),
+                TIERS[2].0,
+                TIERS[2].1
             ));
         }
-        let ot: OwnedTables = t;
-        if ot.arena_bytes() > SIM_ARENA {
+        if m.tx.len() > usize::from(u8::MAX) + 1 {
             return Err(format!(
-                "module {} needs {} arena bytes; the simulator holds {SIM_ARENA}",
+                "module {} sends {} topics; a module's transmit topics are numbered by a byte (at most 256)",
                 m.name,
-                ot.arena_bytes()
+                m.tx.len()
             ));
         }
         let mut g = Vec::new();
@@ -51,8 +71,8 @@ pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
                 g.push(Gen::hrt(tx));
                 continue;
             }
-            let kind = match traffic.iter().find(|t| t.topic == topic.name) {
-                Some(t) => Some(t.kind),
+            let kind = match kinds.get(topic.name.as_str()) {
+                Some(k) => Some(*k),
                 None => topic.rate_hz.filter(|r| *r > 0.0).map(|r| {
                     let mean = 1e9 / r;
                     GenKind::Random {
@@ -72,11 +92,6 @@ pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
         }
         tables.push(ot);
         gens.push(g);
-    }
-    for t in traffic {
-        if plan.topic(&t.topic).is_none() {
-            return Err(format!("traffic for unknown topic `{}`", t.topic));
-        }
     }
     let master = plan.bus.master;
     let name = |n: usize, k: usize| -> String {
@@ -179,23 +194,30 @@ pub fn parse_user(text: &str, dir: &std::path::Path) -> Result<UserScenario, Str
 /// Expands the patterns of `user` over the topics of `plan` (first matching pattern wins).
 pub fn expand(user: &UserScenario, plan: &Plan) -> Result<Vec<Traffic>, String> {
     let mut out: Vec<Traffic> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     for (pattern, kind) in &user.traffic {
-        let matches: Vec<&str> = plan
+        let matching: Vec<&rtcan_model::TopicPlan> = plan
             .topics
             .iter()
-            .map(|t| t.name.as_str())
-            .filter(|n| match pattern.strip_suffix('*') {
-                Some(prefix) => n.starts_with(prefix),
-                None => n == pattern,
+            .filter(|t| match pattern.strip_suffix('*') {
+                Some(prefix) => t.name.starts_with(prefix),
+                None => t.name == *pattern,
             })
             .collect();
-        if matches.is_empty() {
+        if matching.is_empty() {
             return Err(format!(
                 "traffic pattern `{pattern}` matches no topic of the robot"
             ));
         }
+        if let Some(h) = matching.iter().find(|t| t.class == Class::Hrt) {
+            return Err(format!(
+                "traffic pattern `{pattern}` matches HRT topic `{}`: HRT topics send a fresh sample in every calendar slot; traffic applies to SRT and NRT topics",
+                h.name
+            ));
+        }
+        let matches = matching.iter().map(|t| t.name.as_str());
         for m in matches {
-            if !out.iter().any(|t| t.topic == m) {
+            if seen.insert(m) {
                 out.push(Traffic {
                     topic: m.to_string(),
                     kind: *kind,

@@ -16,7 +16,7 @@ use crate::metrics::{compute, Figures, TopicInfo, Window};
 use crate::policy::PolicyKind;
 use crate::slots::overlaps;
 use crate::tables::OwnedTables;
-use crate::traffic::{EngineNode, Gen, TrafficHost, WARMUP_NS};
+use crate::traffic::{stack_bytes, Gen, SizedNode, TrafficHost, WARMUP_NS};
 
 /// Physical and run parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -70,6 +70,7 @@ impl SimConfig {
 }
 
 /// A scenario: per-node tables, generators, and how to label topics.
+#[derive(Clone, Debug)]
 pub struct Scenario {
     /// Tables of every node (node 0 is the master).
     pub tables: Vec<OwnedTables>,
@@ -128,20 +129,40 @@ pub fn window(cfg: &SimConfig) -> Window {
     }
 }
 
-/// Runs `sc` with the engine under `policy` (laxity encoding from the tables).
-pub fn run_engine(sc: &Scenario, cfg: &SimConfig, kind: PolicyKind, policy: Policy) -> Run {
-    run_bus(
-        sc,
-        cfg,
-        kind,
-        |t, host, clock| EngineNode::new(t, policy, host, clock.local(0)),
-        |m| (&m.host, Some(*m.engine.counters())),
-        |m| Some(m.engine.clock()),
-    )
+/// Runs `sc` with the engine under `policy` (laxity encoding from the tables). Each
+/// module's engine is sized by its tables (`traffic::TIERS`).
+pub fn run_engine(
+    sc: &Scenario,
+    cfg: &SimConfig,
+    kind: PolicyKind,
+    policy: Policy,
+) -> Result<Run, String> {
+    let go = || {
+        run_bus(
+            sc,
+            cfg,
+            kind,
+            |t, host, clock| SizedNode::new(t, policy, host, clock.local(0)),
+            |m| (m.host(), Some(m.counters())),
+            |m| Some(m.clock()),
+        )
+    };
+    match stack_bytes(&sc.tables) {
+        None => go(),
+        // The largest engine is built on the stack before it is boxed.
+        Some(bytes) => std::thread::scope(|s| {
+            std::thread::Builder::new()
+                .stack_size(bytes)
+                .spawn_scoped(s, go)
+                .map_err(|e| format!("simulator thread: {e}"))?
+                .join()
+                .map_err(|_| "simulator thread panicked".to_string())?
+        }),
+    }
 }
 
 /// Runs `sc` on plain CAN with fixed priorities (baseline (d)).
-pub fn run_fixed(sc: &Scenario, cfg: &SimConfig) -> Run {
+pub fn run_fixed(sc: &Scenario, cfg: &SimConfig) -> Result<Run, String> {
     run_bus(
         sc,
         cfg,
@@ -153,7 +174,7 @@ pub fn run_fixed(sc: &Scenario, cfg: &SimConfig) -> Run {
                 .filter(|i| i.node == usize::from(t.module))
                 .map(|i| i.period_ns)
                 .collect();
-            FixedNode::new(t, host, &periods)
+            Ok(FixedNode::new(t, host, &periods))
         },
         |m| (&m.host, None),
         |_| None,
@@ -189,10 +210,10 @@ fn run_bus<'t, M: Module>(
     sc: &'t Scenario,
     cfg: &SimConfig,
     kind: PolicyKind,
-    make: impl Fn(&'t OwnedTables, TrafficHost, NodeClock) -> M,
+    make: impl Fn(&'t OwnedTables, TrafficHost, NodeClock) -> Result<M, String>,
     parts: impl Fn(&M) -> (&TrafficHost, Option<Counters>),
     slot_clock: impl Fn(&M) -> Option<&SlotClock>,
-) -> Run {
+) -> Result<Run, String> {
     let bitrate = sc.bus().map_or(1_000_000, |b| b.bitrate);
     let mut bus = Bus::new(bitrate, cfg.bit_error_rate, cfg.seed);
     for (n, t) in sc.tables.iter().enumerate() {
@@ -200,7 +221,7 @@ fn run_bus<'t, M: Module>(
         let gens = sc.gens.get(n).map_or(&[][..], Vec::as_slice);
         let host = TrafficHost::new(n as u8, clock, gens, t.tx.len(), cfg.seed);
         bus.add_node(
-            make(t, host, clock),
+            make(t, host, clock)?,
             NodeSetup {
                 clock,
                 irq_latency_ns: cfg.irq_latency_ns,
@@ -239,7 +260,7 @@ fn run_bus<'t, M: Module>(
         }
         _ => 0,
     };
-    Run {
+    Ok(Run {
         policy: kind.name(),
         figures,
         overlaps: ov,
@@ -254,7 +275,7 @@ fn run_bus<'t, M: Module>(
         rx_bad,
         events,
         sim_ns: end,
-    }
+    })
 }
 
 /// Topic descriptions of a scenario whose tables are `tables`, labelled by `label(node, tx)`.

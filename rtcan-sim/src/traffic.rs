@@ -6,6 +6,8 @@
 //! Payloads carry their identity so that the wire log alone tells which event a frame
 //! belongs to: bytes 0..4 sequence number (LE), byte 4 node, byte 5 topic, then a
 //! pattern derived from the sequence number (checked on delivery).
+use rtcan_core::clock::SlotClock;
+use rtcan_core::counters::Counters;
 use rtcan_core::driver::{Event, Mailbox, Token, TxOutcome, TxResult};
 use rtcan_core::engine::{Engine, Policy};
 use rtcan_core::{Frame, Host, Nanos};
@@ -16,14 +18,34 @@ use crate::controller::SimController;
 use crate::rng::Rng;
 use crate::tables::OwnedTables;
 
-/// Receive topics an engine of the simulator can hold.
-pub const SIM_RX: usize = 128;
-/// Reassembly arena of a simulated engine, bytes.
-pub const SIM_ARENA: usize = 8192;
 /// SRT/NRT queue capacity of a simulated engine.
 pub const SIM_Q: usize = 64;
-/// The engine type every simulated module runs.
-pub type SimEngine<'t> = Engine<'t, SIM_RX, SIM_ARENA, SIM_Q>;
+/// Engine sizes (receive topics, arena bytes) the simulator is built with; each module
+/// runs the smallest that holds its tables. The last holds every robot `check` admits:
+/// at most 2^16 topics (16-bit message IDs) in at most 65 535 bytes of receive buffers
+/// (16-bit arena offsets).
+pub const TIERS: [(usize, usize); 3] = [(128, 8 << 10), (2048, 64 << 10), (1 << 16, 64 << 10)];
+/// The engine type of a simulated module holding `RX` receive topics and `ARENA` bytes.
+pub type SimEngine<'t, const RX: usize, const ARENA: usize> = Engine<'t, RX, ARENA, SIM_Q>;
+type Small<'t> = EngineNode<'t, { TIERS[0].0 }, { TIERS[0].1 }>;
+type Medium<'t> = EngineNode<'t, { TIERS[1].0 }, { TIERS[1].1 }>;
+type Large<'t> = EngineNode<'t, { TIERS[2].0 }, { TIERS[2].1 }>;
+
+/// Index in `TIERS` of the engine that holds `tables` (`None`: beyond every tier).
+pub fn tier(tables: &OwnedTables) -> Option<usize> {
+    TIERS
+        .iter()
+        .position(|&(rx, arena)| tables.rx.len() <= rx && tables.arena_bytes() <= arena)
+}
+
+/// Stack a thread needs to build the engines of `tables` (an engine is built by value
+/// before it is boxed: the largest tier does not fit a default stack); `None` when the
+/// default stack does.
+pub fn stack_bytes(tables: &[OwnedTables]) -> Option<usize> {
+    tables.iter().any(|t| tier(t) == Some(2)).then(|| {
+        4 * std::mem::size_of::<SimEngine<'static, { TIERS[2].0 }, { TIERS[2].1 }>>() + (16 << 20)
+    })
+}
 
 /// How a topic's messages are produced.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -319,17 +341,17 @@ impl Host for TrafficHost {
 }
 
 /// A module: the engine and a traffic host.
-pub struct EngineNode<'t> {
+pub struct EngineNode<'t, const RX: usize, const ARENA: usize> {
     /// The protocol engine (boxed: its arena is large).
-    pub engine: Box<SimEngine<'t>>,
+    pub engine: Box<SimEngine<'t, RX, ARENA>>,
     /// The generator.
     pub host: TrafficHost,
 }
 
-impl<'t> EngineNode<'t> {
+impl<'t, const RX: usize, const ARENA: usize> EngineNode<'t, RX, ARENA> {
     /// Engine on `tables` with `policy`, created at local time `now`.
     pub fn new(tables: &'t OwnedTables, policy: Policy, host: TrafficHost, now: Nanos) -> Self {
-        let mut engine = Box::new(SimEngine::new(tables.view(), now));
+        let mut engine = Box::new(SimEngine::<RX, ARENA>::new(tables.view(), now));
         engine.set_policy(policy);
         EngineNode { engine, host }
     }
@@ -344,7 +366,7 @@ impl<'t> EngineNode<'t> {
     }
 }
 
-impl Module for EngineNode<'_> {
+impl<const RX: usize, const ARENA: usize> Module for EngineNode<'_, RX, ARENA> {
     fn start(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
         self.next(now, can)
     }
@@ -387,6 +409,98 @@ impl Module for EngineNode<'_> {
 
     fn rx_overrun(&mut self, _now: Nanos) {
         self.engine.on_rx_overrun();
+    }
+}
+
+/// A module sized by its tables (one of `TIERS`).
+pub enum SizedNode<'t> {
+    /// `TIERS[0]`.
+    Small(Small<'t>),
+    /// `TIERS[1]`.
+    Medium(Medium<'t>),
+    /// `TIERS[2]`.
+    Large(Large<'t>),
+}
+
+/// Runs `$body` with `$n` bound to the engine node of whatever size.
+macro_rules! each {
+    ($self:expr, $n:ident => $body:expr) => {
+        match $self {
+            SizedNode::Small($n) => $body,
+            SizedNode::Medium($n) => $body,
+            SizedNode::Large($n) => $body,
+        }
+    };
+}
+
+impl<'t> SizedNode<'t> {
+    /// The smallest engine that holds `tables`, with `policy`, created at local `now`.
+    pub fn new(
+        tables: &'t OwnedTables,
+        policy: Policy,
+        host: TrafficHost,
+        now: Nanos,
+    ) -> Result<Self, String> {
+        Ok(match tier(tables) {
+            Some(0) => SizedNode::Small(EngineNode::new(tables, policy, host, now)),
+            Some(1) => SizedNode::Medium(EngineNode::new(tables, policy, host, now)),
+            Some(_) => SizedNode::Large(EngineNode::new(tables, policy, host, now)),
+            None => {
+                return Err(format!(
+                    "module {} receives {} topics in {} arena bytes; the simulator holds {} and {}",
+                    tables.module,
+                    tables.rx.len(),
+                    tables.arena_bytes(),
+                    TIERS[2].0,
+                    TIERS[2].1
+                ))
+            }
+        })
+    }
+
+    /// The traffic host.
+    pub fn host(&self) -> &TrafficHost {
+        each!(self, n => &n.host)
+    }
+
+    /// Engine counters.
+    pub fn counters(&self) -> Counters {
+        each!(self, n => *n.engine.counters())
+    }
+
+    /// The engine's slot clock.
+    pub fn clock(&self) -> &SlotClock {
+        each!(self, n => n.engine.clock())
+    }
+}
+
+impl Module for SizedNode<'_> {
+    fn start(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        each!(self, n => n.start(now, can))
+    }
+    fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        each!(self, n => n.wake(now, can))
+    }
+    fn rx(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        each!(self, n => n.rx(frame, sof, now, can))
+    }
+    fn tx_done(
+        &mut self,
+        mailbox: Mailbox,
+        result: TxResult,
+        now: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        each!(self, n => n.tx_done(mailbox, result, now, can))
+    }
+    fn rx_overrun(&mut self, now: Nanos) {
+        each!(self, n => n.rx_overrun(now))
     }
 }
 

@@ -16,7 +16,9 @@ fn log(seed: u64) -> String {
     };
     let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
     candump::log(
-        &run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).wire,
+        &run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS)
+            .unwrap()
+            .wire,
         "can0",
     )
 }
@@ -37,7 +39,7 @@ fn decode_reassembles_every_sent_message_of_a_sim_log() {
         ..SimConfig::default()
     };
     let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
-    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS);
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
     let text = candump::log(&run.wire, "can0");
     let entries = candump::parse(&text).unwrap();
     assert_eq!(entries.len(), run.wire.iter().filter(|w| w.ok).count());

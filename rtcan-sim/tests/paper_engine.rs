@@ -12,7 +12,7 @@ fn paper_hrt_never_misses_and_never_overlaps() {
         ..SimConfig::default()
     };
     let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
-    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS);
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
     for h in &run.figures.hrt {
         eprintln!(
             "{} count {} misses {} mean {:.1} std {:.2} jit {}..{}",

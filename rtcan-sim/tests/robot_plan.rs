@@ -19,12 +19,13 @@ fn plan_scenario_runs_with_zero_hrt_misses() {
         seconds: 0.3,
         ..SimConfig::default()
     };
-    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS);
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
     eprintln!("{}", rtcan_sim::report::text(&run));
     assert_eq!(run.overlaps, 0);
     assert!(!run.figures.hrt.is_empty());
     assert!(run.figures.hrt.iter().all(|h| h.misses == 0 && h.count > 0));
     assert_eq!(run.rx_bad, 0);
+    assert!(run.rx_ok > 0);
 }
 
 #[test]
@@ -42,12 +43,13 @@ fn user_scenario_file_drives_the_plan_like_the_hand_built_benchmark() {
         seconds: 0.5,
         ..SimConfig::default()
     };
-    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS);
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
     let events: u64 = run.figures.srt.iter().map(|s| s.count).sum();
     assert!(events > 500, "{events}");
     assert_eq!(run.overlaps, 0);
     assert!(run.figures.hrt.iter().all(|h| h.misses == 0));
     assert_eq!(run.rx_bad, 0);
+    assert!(run.rx_ok > 0);
 }
 
 #[test]
@@ -68,4 +70,92 @@ fn user_scenario_errors_are_reported() {
     assert!(rtcan_sim::robot::expand(&u, &plan())
         .unwrap_err()
         .contains("matches no topic"));
+}
+
+#[test]
+fn traffic_on_an_hrt_topic_is_an_error_not_ignored() {
+    let d = std::path::Path::new(".");
+    let p = plan();
+    for pat in ["h_a1", "h_*", "*"] {
+        let u = rtcan_sim::robot::parse_user(
+            &format!("robot = \"x\"\n[traffic]\n\"{pat}\" = {{ period = \"1ms\" }}"),
+            d,
+        )
+        .unwrap();
+        let e = rtcan_sim::robot::expand(&u, &p).unwrap_err();
+        assert!(e.contains("matches HRT topic `h_a1`"), "{pat}: {e}");
+    }
+    let direct = [rtcan_sim::robot::Traffic {
+        topic: "h_b2".into(),
+        kind: rtcan_sim::traffic::GenKind::Periodic { period: 1_000_000 },
+    }];
+    let e = rtcan_sim::robot::scenario(&p, &direct).unwrap_err();
+    assert!(e.contains("traffic for HRT topic `h_b2`"), "{e}");
+}
+
+/// `check` admits robots/hrt200.toml (the sink receives 200 topics); the simulator
+/// held 128 and refused it. Engines are now sized by the robot.
+#[test]
+fn every_robot_check_admits_simulates_hrt200() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/hrt200.toml");
+    let p = rtcan_model::Robot::load(path)
+        .map_err(|d| d.render())
+        .unwrap();
+    let sc = rtcan_sim::robot::scenario(&p, &[]).unwrap();
+    let sink = sc.tables.iter().map(|t| t.rx.len()).max().unwrap();
+    assert_eq!(sink, 200);
+    let cfg = SimConfig {
+        seconds: 0.3,
+        ..SimConfig::default()
+    };
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
+    assert_eq!(run.figures.hrt.len(), 200);
+    assert_eq!(run.rx_bad, 0);
+    assert!(run.rx_ok >= 200, "{}", run.rx_ok);
+    assert!(run.figures.hrt.iter().all(|h| h.count > 0));
+}
+
+/// The largest engine tier (built on a thread with a stack sized by the robot): one
+/// module receiving 2 250 one-byte topics from nine publishers.
+#[test]
+fn a_robot_beyond_the_medium_tier_simulates() {
+    let mut src = String::from(
+        "[bus]\nbitrate = \"1Mbit/s\"\ncycle = \"10ms\"\nslots = 10\nmaster = \"p0\"\n\
+         [types.B]\nv = \"u8\"\n[modules.sink]\nboard = \"stm32f103re\"\nfilters = \"accept-all\"\n\
+         [nodes.drain]\nmodule = \"sink\"\n",
+    );
+    for m in 0..9 {
+        src.push_str(&format!(
+            "[modules.p{m}]\nboard = \"stm32f103re\"\n[nodes.n{m}]\nmodule = \"p{m}\"\n"
+        ));
+    }
+    for i in 0..2250 {
+        // The last few carry traffic the sink must receive intact.
+        let rate = if i >= 2245 { "rate = \"50Hz\"\n" } else { "" };
+        src.push_str(&format!(
+            "[topics.t{i}]\ntype = \"B\"\npublisher = \"n{}\"\nclass = \"nrt\"\n{rate}subscribers = [\"drain\"]\n",
+            i / 250
+        ));
+    }
+    let p = rtcan_model::Robot::parse("big.toml", &src)
+        .map_err(|d| d.render())
+        .unwrap();
+    let sc = rtcan_sim::robot::scenario(&p, &[]).unwrap();
+    let sink = &sc.tables[0];
+    assert_eq!(sink.rx.len(), 2250);
+    assert_eq!(rtcan_sim::traffic::tier(sink), Some(2));
+    assert!(rtcan_sim::traffic::stack_bytes(&sc.tables).is_some());
+    let run = run_engine(
+        &sc,
+        &SimConfig {
+            seconds: 0.1,
+            ..SimConfig::default()
+        },
+        PolicyKind::Ours,
+        Policy::OURS,
+    )
+    .unwrap();
+    assert_eq!(run.rx_bad, 0);
+    assert!(run.rx_ok >= 10, "{}", run.rx_ok);
+    assert_eq!(run.overlaps, 0);
 }
