@@ -1,85 +1,206 @@
-//! `rtcan decode <log> --robot robot.toml`: candump log → topic-level messages.
-use rtcan_sim::decode::{decode, plan_catalog, render, scenario_catalog, Catalog, Decoded};
-use std::io::Write as _;
+//! `rtcan decode <log|-> --robot robot.toml`: candump log → topic-level messages, line by
+//! line (a record is printed as soon as its last frame is read; memory does not grow
+//! with the log).
+use std::io::{BufRead, Write as _};
 
-use rtcan_sim::{candump, paper};
+use rtcan_sim::candump::{classify, Line};
+use rtcan_sim::decode::{plan_catalog, render, scenario_catalog, Catalog, Decoder};
+use rtcan_sim::paper;
 
 const USAGE: &str =
-    "usage: rtcan decode <candump.log> (--robot robot.toml | --scenario rtcan-paper)";
+    "usage: rtcan decode <candump.log | -> (--robot robot.toml | --scenario rtcan-paper) [--force]
 
-/// Runs `rtcan decode`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut log = None;
-    let mut robot = None;
-    let mut scenario = None;
+  <candump.log>      a `candump -l` log; `-` reads standard input
+  --robot FILE       the robot the log was recorded on (topics, types, fingerprint)
+  --scenario NAME    a built-in scenario's catalog (rtcan-paper)
+  --force            decode messages of senders whose heartbeat carries another robot's
+                     fingerprint too (marked FOREIGN SENDER); by default they are refused
+
+remote, error and CAN FD frames are skipped and counted; malformed lines are reported
+(first 10) and counted; exit 0 when every line parsed, 1 otherwise, 2 on usage errors";
+
+/// Malformed lines reported one by one; the rest only counted.
+const REPORTED_BAD_LINES: u64 = 10;
+
+struct Args {
+    log: String,
+    robot: Option<String>,
+    scenario: Option<String>,
+    force: bool,
+}
+
+fn parse(args: &[String]) -> Result<Option<Args>, String> {
+    let (mut log, mut robot, mut scenario, mut force) = (None, None, None, false);
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--robot" => robot = it.next().cloned(),
-            "--scenario" => scenario = it.next().cloned(),
-            s if s.starts_with("--") => {
-                eprintln!("error: unknown option `{s}`\n{USAGE}");
-                return 2;
+            "-h" | "--help" => return Ok(None),
+            "--robot" => robot = Some(it.next().cloned().ok_or("--robot needs a file")?),
+            "--scenario" => scenario = Some(it.next().cloned().ok_or("--scenario needs a name")?),
+            "--force" => force = true,
+            s if s.starts_with('-') && s != "-" => return Err(format!("unknown option `{s}`")),
+            s => {
+                if let Some(first) = &log {
+                    return Err(format!("two logs, `{first}` and `{s}`: give one"));
+                }
+                log = Some(s.to_string());
             }
-            s => log = Some(s.to_string()),
         }
     }
-    let Some(log) = log else {
-        eprintln!("error: no log file\n{USAGE}");
-        return 2;
+    let log = log.ok_or("no log file (`-` reads standard input)")?;
+    Ok(Some(Args {
+        log,
+        robot,
+        scenario,
+        force,
+    }))
+}
+
+fn catalog(a: &Args) -> Result<Catalog, String> {
+    match (&a.robot, a.scenario.as_deref()) {
+        (Some(_), Some(_)) => Err("give --robot or --scenario, not both".into()),
+        (Some(r), None) => rtcan_model::Robot::load(r)
+            .map(|plan| plan_catalog(&plan))
+            .map_err(|d| d.render()),
+        (None, Some("rtcan-paper")) => {
+            paper::scenario(paper::our_laxity(), 1.0).map(|sc| scenario_catalog(&sc))
+        }
+        (None, Some(other)) => Err(format!(
+            "unknown scenario `{other}` (decode knows rtcan-paper; other robots: --robot FILE)"
+        )),
+        (None, None) => Err("need --robot FILE or --scenario rtcan-paper".into()),
+    }
+}
+
+/// Runs `rtcan decode`; returns the exit code.
+pub fn run(args: &[String]) -> i32 {
+    let a = match parse(args) {
+        Ok(Some(a)) => a,
+        Ok(None) => {
+            let _ = writeln!(std::io::stdout(), "{USAGE}");
+            return 0;
+        }
+        Err(e) => {
+            eprintln!("error: {e}\n{USAGE}");
+            return 2;
+        }
     };
-    let cat: Catalog = match (robot, scenario.as_deref()) {
-        (Some(r), _) => match rtcan_model::Robot::load(&r) {
-            Ok(plan) => plan_catalog(&plan),
-            Err(d) => {
-                eprint!("{}", d.render());
-                return 2;
+    let cat = match catalog(&a) {
+        Ok(c) => c,
+        Err(e) => {
+            eprint!("{e}");
+            if !e.ends_with('\n') {
+                eprintln!();
             }
-        },
-        (None, Some("rtcan-paper")) => match paper::scenario(paper::our_laxity(), 1.0) {
-            Ok(sc) => scenario_catalog(&sc),
+            return 2;
+        }
+    };
+    let input: Box<dyn BufRead> = if a.log == "-" {
+        Box::new(std::io::stdin().lock())
+    } else {
+        match std::fs::File::open(&a.log) {
+            Ok(f) => Box::new(std::io::BufReader::new(f)),
             Err(e) => {
-                eprintln!("error: {e}");
+                eprintln!("error: {}: {e}", a.log);
                 return 2;
             }
-        },
-        _ => {
-            eprintln!("error: need --robot or --scenario rtcan-paper\n{USAGE}");
-            return 2;
         }
     };
-    let text = match std::fs::read_to_string(&log) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("error: {log}: {e}");
-            return 2;
-        }
+    let name = if a.log == "-" {
+        "<stdin>"
+    } else {
+        a.log.as_str()
     };
-    let entries = match candump::parse(&text) {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {log}:{}: {}", e.line, e.what);
-            return 2;
+    decode_stream(input, name, &cat, a.force, &mut std::io::stdout().lock())
+}
+
+/// Decodes `input` line by line onto `out`; diagnostics on stderr. Returns the exit code.
+fn decode_stream(
+    mut input: impl BufRead,
+    name: &str,
+    cat: &Catalog,
+    force: bool,
+    out: &mut impl std::io::Write,
+) -> i32 {
+    let mut dec = Decoder::new(cat);
+    dec.force = force;
+    let (mut skipped, mut bad_lines, mut lineno) = (0u64, 0u64, 0u64);
+    let mut warned = false;
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        match input.read_until(b'\n', &mut line) {
+            Ok(0) => break,
+            Ok(_) => {}
+            Err(e) => {
+                eprintln!("error: {name}: {e}");
+                return 1;
+            }
         }
-    };
-    let out = decode(&entries, &cat);
-    let (mut msgs, mut unknown) = (0, 0);
-    let mut stdout = std::io::stdout().lock();
-    for d in &out {
-        match d {
-            Decoded::Message { .. } => msgs += 1,
-            Decoded::Unattributed { .. } => unknown += 1,
-            _ => {}
+        lineno += 1;
+        let parsed = std::str::from_utf8(&line)
+            .map_err(|_| "not UTF-8")
+            .and_then(classify);
+        let entry = match parsed {
+            Ok(Line::Frame(e)) => e,
+            Ok(Line::Blank) => continue,
+            Ok(Line::Skipped(_)) => {
+                skipped += 1;
+                continue;
+            }
+            Err(what) => {
+                bad_lines += 1;
+                if bad_lines <= REPORTED_BAD_LINES {
+                    eprintln!("warning: {name}:{lineno}: {what} (line skipped)");
+                }
+                continue;
+            }
+        };
+        let Some(rec) = dec.push(&entry) else {
+            continue;
+        };
+        if !warned && dec.counts.foreign_heartbeats > 0 {
+            warned = true;
+            if let Some(fp) = cat.fingerprint {
+                eprintln!(
+                    "warning: {name}:{lineno}: a heartbeat carries another robot's fingerprint (robot: {fp:#010x}); {}",
+                    if force {
+                        "its senders' messages are decoded anyway (--force), marked FOREIGN SENDER"
+                    } else {
+                        "its senders' messages are not decoded (--force decodes them)"
+                    }
+                );
+            }
         }
         // A closed pipe (`| head`) ends the listing quietly.
-        if writeln!(stdout, "{}", render(d, &cat)).is_err() {
+        if writeln!(out, "{}", render(&rec, cat)).is_err() {
             return 0;
         }
     }
+    let c = dec.counts;
     let _ = writeln!(
-        stdout,
-        "-- {} frames: {msgs} messages, {unknown} frames not attributed",
-        entries.len()
+        out,
+        "-- {} frames: {} messages, {} frames not attributed, {skipped} remote/error/FD frames skipped, {bad_lines} malformed lines",
+        c.frames, c.messages, c.unattributed
     );
-    0
+    if c.foreign_heartbeats > 0 {
+        let _ = writeln!(
+            out,
+            "-- {} heartbeats carry another robot's fingerprint: {} messages of their senders refused, {} decoded with --force",
+            c.foreign_heartbeats, c.refused, c.forced
+        );
+        eprintln!(
+            "warning: {} heartbeats carry another robot's fingerprint than {:#010x}: the log is not of this robot (or of another version of it)",
+            c.foreign_heartbeats,
+            cat.fingerprint.unwrap_or(0)
+        );
+    }
+    let _ = out.flush();
+    if bad_lines > REPORTED_BAD_LINES {
+        eprintln!(
+            "warning: {name}: {} more malformed lines",
+            bad_lines - REPORTED_BAD_LINES
+        );
+    }
+    i32::from(bad_lines > 0)
 }

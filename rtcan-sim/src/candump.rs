@@ -55,11 +55,35 @@ pub struct ParseError {
     pub what: &'static str,
 }
 
-/// Parses one line (blank lines and `#` comments give `Ok(None)`).
+/// What a well-formed log line holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Line {
+    /// A classic data frame.
+    Frame(Entry),
+    /// Blank or `#` comment.
+    Blank,
+    /// A frame RTCAN never sends (remote, error or CAN FD frame): skipped and counted.
+    Skipped(&'static str),
+}
+
+/// `candump` marks error frames with this identifier bit (SocketCAN `CAN_ERR_FLAG`).
+const CAN_ERR_FLAG: u32 = 0x2000_0000;
+
+/// Parses one line (blank lines and `#` comments give `Ok(None)`; remote, error and FD
+/// frames are errors here, see `classify`).
 pub fn parse_line(text: &str) -> Result<Option<Entry>, &'static str> {
+    match classify(text)? {
+        Line::Frame(e) => Ok(Some(e)),
+        Line::Blank => Ok(None),
+        Line::Skipped(what) => Err(what),
+    }
+}
+
+/// Parses one line, telling frames RTCAN never sends apart from malformed lines.
+pub fn classify(text: &str) -> Result<Line, &'static str> {
     let text = text.trim();
     if text.is_empty() || text.starts_with('#') {
-        return Ok(None);
+        return Ok(Line::Blank);
     }
     let mut parts = text.split_whitespace();
     let stamp = parts.next().ok_or("missing timestamp")?;
@@ -77,12 +101,15 @@ pub fn parse_line(text: &str) -> Result<Option<Entry>, &'static str> {
     let frac_ns: u64 = format!("{frac:0<9}").parse().map_err(|_| "bad fraction")?;
     let (id, data) = body.split_once('#').ok_or("frame without '#'")?;
     if data.starts_with('R') {
-        return Err("remote frame");
+        return Ok(Line::Skipped("remote frame"));
     }
     if data.starts_with('#') {
-        return Err("CAN FD frame");
+        return Ok(Line::Skipped("CAN FD frame"));
     }
     let raw = u32::from_str_radix(id, 16).map_err(|_| "bad identifier")?;
+    if id.len() == 8 && raw & CAN_ERR_FLAG != 0 && raw < 2 * CAN_ERR_FLAG {
+        return Ok(Line::Skipped("error frame"));
+    }
     let standard = id.len() == 3;
     if !(standard || id.len() == 8) {
         return Err("identifier neither 3 nor 8 hex digits");
@@ -98,7 +125,7 @@ pub fn parse_line(text: &str) -> Result<Option<Entry>, &'static str> {
     let can_id = CanId::from_raw(raw).ok_or("identifier above 29 bits")?;
     let frame =
         Frame::from_parts(can_id, (data.len() / 2) as u8, bytes).ok_or("bad data length")?;
-    Ok(Some(Entry {
+    Ok(Line::Frame(Entry {
         time_ns: secs.saturating_mul(1_000_000_000).saturating_add(frac_ns),
         iface: iface.to_string(),
         frame,
@@ -151,8 +178,20 @@ mod tests {
         assert!(parse_line("(1.5) can0 123#01").unwrap().unwrap().standard);
         assert_eq!(parse_line("  ").unwrap(), None);
         assert_eq!(
-            parse_line("(1.0) can0 20000000#").unwrap_err(),
+            parse_line("(1.0) can0 40000000#").unwrap_err(),
             "identifier above 29 bits"
+        );
+        assert_eq!(
+            classify("(1.0) can0 20000080#0000080000000000").unwrap(),
+            Line::Skipped("error frame")
+        );
+        assert_eq!(
+            classify("(1.0) can0 00000123##1AABB").unwrap(),
+            Line::Skipped("CAN FD frame")
+        );
+        assert_eq!(
+            classify("(1.0) can0 00000123#R").unwrap(),
+            Line::Skipped("remote frame")
         );
         assert_eq!(
             parse_line("(1.0) can0 00000001#0").unwrap_err(),

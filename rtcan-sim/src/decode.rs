@@ -59,6 +59,8 @@ pub struct TopicDesc {
     pub size: u16,
     /// Fields.
     pub fields: Vec<FieldDesc>,
+    /// Index of the publishing module (the heartbeat's `module`), when known.
+    pub module: Option<u8>,
 }
 
 /// What the decoder knows about a bus.
@@ -68,6 +70,8 @@ pub struct Catalog {
     pub slots_per_cycle: u8,
     /// Topics.
     pub topics: Vec<TopicDesc>,
+    /// The robot's fingerprint: heartbeats carrying another one come from another robot.
+    pub fingerprint: Option<u32>,
 }
 
 /// One decoded record.
@@ -79,6 +83,17 @@ pub enum Decoded {
         topic: usize,
         payload: Vec<u8>,
         fragments: u8,
+        /// `Some(fp)`: decoded with `force` although its sender's heartbeat carries
+        /// fingerprint `fp`, not the robot's (the fields are likely meaningless).
+        foreign: Option<u32>,
+    },
+    /// A complete message not decoded: its sender's heartbeat carries fingerprint
+    /// `fingerprint`, not the robot's (`Decoder::force` decodes it anyway).
+    Refused {
+        time_ns: Nanos,
+        topic: usize,
+        module: u8,
+        fingerprint: u32,
     },
     /// A sync frame.
     Sync {
@@ -101,104 +116,185 @@ pub enum Decoded {
     },
 }
 
-/// Decodes `entries` with `cat`.
-pub fn decode(entries: &[Entry], cat: &Catalog) -> Vec<Decoded> {
-    let by_id: HashMap<u16, usize> = cat
-        .topics
-        .iter()
-        .enumerate()
-        .map(|(i, t)| (t.msg_id, i))
-        .collect();
-    let mut state: Vec<RxState> = vec![RxState::default(); cat.topics.len()];
-    let mut bufs: Vec<Vec<u8>> = cat
-        .topics
-        .iter()
-        .map(|t| vec![0u8; wire_len(usize::from(t.size))])
-        .collect();
-    let mut frags: Vec<u8> = vec![0; cat.topics.len()];
-    let mut out = Vec::new();
-    for e in entries {
+/// Counts kept by a `Decoder`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DecodeCounts {
+    /// Frames fed.
+    pub frames: u64,
+    /// Messages decoded (foreign ones decoded with `force` included).
+    pub messages: u64,
+    /// Frames not attributed (unknown ID, reassembly drop, standard ID, bad sync).
+    pub unattributed: u64,
+    /// Heartbeats carrying another fingerprint than the robot's.
+    pub foreign_heartbeats: u64,
+    /// Messages of senders with another fingerprint, not decoded.
+    pub refused: u64,
+    /// Messages of senders with another fingerprint, decoded because of `force`.
+    pub forced: u64,
+}
+
+/// Streaming decoder: one frame in, at most one record out; memory bounded by the
+/// catalog, not by the log.
+pub struct Decoder<'c> {
+    cat: &'c Catalog,
+    by_id: HashMap<u16, usize>,
+    state: Vec<RxState>,
+    bufs: Vec<Vec<u8>>,
+    frags: Vec<u8>,
+    /// Last heartbeat fingerprint per module index, when it differs from the robot's.
+    foreign: HashMap<u8, u32>,
+    /// Modules whose last heartbeat carried the robot's fingerprint.
+    matching: std::collections::HashSet<u8>,
+    /// A foreign fingerprint heard, while no module has matched: the verdict for
+    /// senders not heard from yet (one robot's modules share one fingerprint).
+    bus_foreign: Option<u32>,
+    /// Decode messages of foreign senders too (marked).
+    pub force: bool,
+    /// Counts so far.
+    pub counts: DecodeCounts,
+}
+
+impl<'c> Decoder<'c> {
+    /// A decoder for the bus `cat` describes.
+    pub fn new(cat: &'c Catalog) -> Self {
+        Decoder {
+            cat,
+            by_id: cat
+                .topics
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (t.msg_id, i))
+                .collect(),
+            state: vec![RxState::default(); cat.topics.len()],
+            bufs: cat
+                .topics
+                .iter()
+                .map(|t| vec![0u8; wire_len(usize::from(t.size))])
+                .collect(),
+            frags: vec![0; cat.topics.len()],
+            foreign: HashMap::new(),
+            matching: std::collections::HashSet::new(),
+            bus_foreign: None,
+            force: false,
+            counts: DecodeCounts::default(),
+        }
+    }
+
+    fn unattributed(&mut self, time_ns: Nanos, raw_id: u32, why: String) -> Option<Decoded> {
+        self.counts.unattributed += 1;
+        Some(Decoded::Unattributed {
+            time_ns,
+            raw_id,
+            why,
+        })
+    }
+
+    /// Feeds one logged frame; returns the record it completes, if any.
+    pub fn push(&mut self, e: &Entry) -> Option<Decoded> {
+        self.counts.frames += 1;
         let id = e.frame.id();
         let t = e.time_ns;
         if e.standard {
-            out.push(Decoded::Unattributed {
-                time_ns: t,
-                raw_id: id.raw(),
-                why: "standard identifier".into(),
-            });
-            continue;
+            return self.unattributed(t, id.raw(), "standard identifier".into());
         }
         if id.is_sync() {
-            match parse_sync(&e.frame, cat.slots_per_cycle) {
-                Some(s) => out.push(Decoded::Sync {
+            return match parse_sync(&e.frame, self.cat.slots_per_cycle) {
+                Some(s) => Some(Decoded::Sync {
                     time_ns: t,
                     cycle: s.cycle,
                     mask: s.mask,
                 }),
-                None => out.push(Decoded::Unattributed {
-                    time_ns: t,
-                    raw_id: id.raw(),
-                    why: "malformed sync".into(),
-                }),
-            }
-            continue;
+                None => self.unattributed(t, id.raw(), "malformed sync".into()),
+            };
         }
         if let Some(hb) = parse_heartbeat(&e.frame) {
-            out.push(Decoded::Heartbeat {
+            match self.cat.fingerprint {
+                Some(fp) if fp != hb.fingerprint => {
+                    self.counts.foreign_heartbeats += 1;
+                    self.foreign.insert(hb.module, hb.fingerprint);
+                    self.matching.remove(&hb.module);
+                    if self.matching.is_empty() {
+                        self.bus_foreign = Some(hb.fingerprint);
+                    }
+                }
+                _ => {
+                    self.foreign.remove(&hb.module);
+                    self.matching.insert(hb.module);
+                    self.bus_foreign = None;
+                }
+            }
+            return Some(Decoded::Heartbeat {
                 time_ns: t,
                 module: hb.module,
                 state: hb.state,
                 fingerprint: hb.fingerprint,
             });
-            continue;
         }
-        let Some(&ti) = by_id.get(&id.msg_id().0) else {
-            out.push(Decoded::Unattributed {
-                time_ns: t,
-                raw_id: id.raw(),
-                why: "unknown message ID".into(),
-            });
-            continue;
+        let Some(&ti) = self.by_id.get(&id.msg_id().0) else {
+            return self.unattributed(t, id.raw(), "unknown message ID".into());
         };
         let (Some(topic), Some(st), Some(buf), Some(n)) = (
-            cat.topics.get(ti),
-            state.get_mut(ti),
-            bufs.get_mut(ti),
-            frags.get_mut(ti),
+            self.cat.topics.get(ti),
+            self.state.get_mut(ti),
+            self.bufs.get_mut(ti),
+            self.frags.get_mut(ti),
         ) else {
-            continue;
+            return None;
         };
         *n = n.saturating_add(1);
         match st.step(buf, usize::from(topic.size), &e.frame, t) {
             RxStep::Complete(payload, first) => {
-                out.push(Decoded::Message {
-                    time_ns: first,
-                    topic: ti,
-                    payload: payload.to_vec(),
-                    fragments: *n,
-                });
+                let fragments = *n;
                 *n = 0;
-            }
-            RxStep::Pending => {}
-            RxStep::Restarted => {
-                out.push(Decoded::Unattributed {
-                    time_ns: t,
-                    raw_id: id.raw(),
-                    why: "unfinished transfer discarded".into(),
+                // The sender's own heartbeat decides; a sender not heard yet takes the
+                // bus's verdict.
+                let sender = topic.module.and_then(|m| match self.foreign.get(&m) {
+                    Some(&fp) => Some((m, fp)),
+                    None if !self.matching.contains(&m) => self.bus_foreign.map(|fp| (m, fp)),
+                    None => None,
                 });
+                match sender {
+                    Some((module, fingerprint)) if !self.force => {
+                        self.counts.refused += 1;
+                        Some(Decoded::Refused {
+                            time_ns: first,
+                            topic: ti,
+                            module,
+                            fingerprint,
+                        })
+                    }
+                    _ => {
+                        self.counts.messages += 1;
+                        if sender.is_some() {
+                            self.counts.forced += 1;
+                        }
+                        Some(Decoded::Message {
+                            time_ns: first,
+                            topic: ti,
+                            payload: payload.to_vec(),
+                            fragments,
+                            foreign: sender.map(|s| s.1),
+                        })
+                    }
+                }
+            }
+            RxStep::Pending => None,
+            RxStep::Restarted => {
                 *n = 1;
+                self.unattributed(t, id.raw(), "unfinished transfer discarded".into())
             }
             RxStep::Dropped(why) => {
-                out.push(Decoded::Unattributed {
-                    time_ns: t,
-                    raw_id: id.raw(),
-                    why: format!("{why:?}"),
-                });
                 *n = 0;
+                self.unattributed(t, id.raw(), format!("{why:?}"))
             }
         }
     }
-    out
+}
+
+/// Decodes `entries` with `cat` (a `Decoder` over a slice).
+pub fn decode(entries: &[Entry], cat: &Catalog) -> Vec<Decoded> {
+    let mut d = Decoder::new(cat);
+    entries.iter().filter_map(|e| d.push(e)).collect()
 }
 
 fn class_name(c: Class) -> &'static str {
@@ -221,11 +317,15 @@ pub fn render(d: &Decoded, cat: &Catalog) -> String {
             topic,
             payload,
             fragments,
+            foreign,
         } => {
             let Some(tp) = cat.topics.get(*topic) else {
                 return String::new();
             };
             let mut s = format!("{} {} {}", stamp(*time_ns), class_name(tp.class), tp.name);
+            if let Some(fp) = foreign {
+                let _ = write!(s, " [FOREIGN SENDER fingerprint={fp:#010x}]");
+            }
             if *fragments > 1 {
                 let _ = write!(s, " [{fragments} frames]");
             }
@@ -258,11 +358,25 @@ pub fn render(d: &Decoded, cat: &Catalog) -> String {
             state,
             fingerprint,
         } => {
-            format!(
+            let mut s = format!(
                 "{} NRT heartbeat module={module} state={state} fingerprint={fingerprint:#010x}",
                 stamp(*time_ns)
-            )
+            );
+            if let Some(fp) = cat.fingerprint.filter(|fp| fp != fingerprint) {
+                let _ = write!(s, " MISMATCH (robot: {fp:#010x})");
+            }
+            s
         }
+        Decoded::Refused {
+            time_ns,
+            topic,
+            module,
+            fingerprint,
+        } => format!(
+            "{} ??? {} not decoded: sender module {module} runs another robot (fingerprint {fingerprint:#010x})",
+            stamp(*time_ns),
+            cat.topics.get(*topic).map_or("?", |t| t.name.as_str())
+        ),
         Decoded::Unattributed {
             time_ns,
             raw_id,
@@ -313,12 +427,14 @@ pub fn scenario_catalog(sc: &crate::run::Scenario) -> Catalog {
                 class: t.class,
                 size: t.size as u16,
                 fields,
+                module: u8::try_from(t.node).ok(),
             }
         })
         .collect();
     Catalog {
         slots_per_cycle: sc.bus().map_or(0, |b| b.slots_per_cycle),
         topics,
+        fingerprint: sc.bus().map(|b| b.fingerprint),
     }
 }
 
@@ -348,10 +464,12 @@ pub fn plan_catalog(plan: &rtcan_model::Plan) -> Catalog {
                         .collect()
                 })
                 .unwrap_or_default(),
+            module: u8::try_from(t.module).ok(),
         })
         .collect();
     Catalog {
         slots_per_cycle: plan.bus.slots_per_cycle,
         topics,
+        fingerprint: Some(plan.fingerprint),
     }
 }

@@ -70,6 +70,7 @@ fn decode_reassembles_every_sent_message_of_a_sim_log() {
             Decoded::Heartbeat { fingerprint, .. } => {
                 assert_eq!(*fingerprint, sc.tables[0].bus.fingerprint)
             }
+            Decoded::Refused { .. } => panic!("own log refused: {}", render(d, &cat)),
             Decoded::Unattributed { why, .. } => {
                 // Only transfers the sender dropped half-way (deadline) may be left over.
                 assert_eq!(why, "unfinished transfer discarded", "{}", render(d, &cat));
