@@ -32,7 +32,7 @@ pub fn paper_comparison(cfg: &SimConfig) -> Result<Comparison, String> {
     let (usable, hyper) = window_capacity(&ours_sc);
     let span = w.to.saturating_sub(w.from);
     let cap = usable as f64 * span as f64 / hyper.max(1) as f64;
-    let offered = offered_ns(&ours_sc, &b.events, w.from, w.to) as f64;
+    let offered = offered_ns(&ours_sc, cfg.seed, w.from, w.to) as f64;
     Ok(Comparison {
         load: cfg.load,
         offered_fraction: if cap > 0.0 { offered / cap } else { 0.0 },
@@ -62,11 +62,8 @@ pub fn miss_ratio(run: &Run) -> f64 {
 
 /// Mean latency of delivered SRT messages over every class, ns.
 pub fn mean_latency_ns(run: &Run) -> f64 {
-    let (sum, n) = run.figures.srt.iter().fold((0u128, 0usize), |(s, n), c| {
-        (
-            s + c.latencies_ns.iter().map(|&x| u128::from(x)).sum::<u128>(),
-            n + c.latencies_ns.len(),
-        )
+    let (sum, n) = run.figures.srt.iter().fold((0u128, 0u64), |(s, n), c| {
+        (s + c.latency.sum, n + c.latency.n)
     });
     if n == 0 {
         0.0

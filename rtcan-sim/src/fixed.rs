@@ -4,12 +4,23 @@
 //! deadline-monotonic for SRT, messages fragmented as RTCAN does. A message still
 //! queued at its deadline (HRT: the next period) is dropped. This is what the bus does
 //! without temporal isolation; it shares no scheduling code with the engine.
+//!
+//! The driver is the one a competent CAN user writes for three mailboxes: the three
+//! highest-priority frames are the ones loaded; when a frame of higher priority than a
+//! loaded one is queued and no mailbox is free, the lowest-priority loaded mailbox is
+//! aborted (a frame already on the wire completes) and reloaded later. Without this a
+//! high-priority frame waits behind three low-priority ones (priority inversion), which
+//! is a driver defect, not a property of fixed-priority CAN; with it the response
+//! times obey the classical analysis (Davis, Burns, Bril, Lukkien 2007; `rta`).
 use rtcan_core::driver::{Mailbox, Token, TxResult, MAILBOXES};
 use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
+use rtcan_core::timing::worst_case_ns;
 use rtcan_core::{CanId, Class, Controller, Frame, Host, Nanos};
 
 use crate::bus::Module;
 use crate::controller::SimController;
+use crate::rta::Stream;
+use crate::run::{Scenario, SimConfig};
 use crate::tables::OwnedTables;
 use crate::traffic::TrafficHost;
 
@@ -23,6 +34,60 @@ struct Msg {
     loaded: Option<usize>,
 }
 
+impl Msg {
+    /// Arbitration key of its next frame (lower wins): priority, message ID, fragment.
+    fn key(&self, msg_id: u16) -> u32 {
+        CanId::new(self.prio, rtcan_core::MsgId(msg_id), self.next_fragment)
+            .map_or(u32::MAX, CanId::raw)
+    }
+}
+
+/// Identifier priority of a topic (lower wins): HRT rate monotonic, 1 ms → 1, 10 ms →
+/// 10, capped below every SRT priority (no period: 1); SRT deadline monotonic above 20;
+/// NRT last.
+pub fn priority(class: Class, hrt_period_ns: Option<Nanos>, deadline_ns: Nanos) -> u8 {
+    match class {
+        Class::Hrt => hrt_period_ns.map_or(1, |p| (p / 1_000_000).clamp(1, 20) as u8),
+        Class::Srt => (21 + deadline_ns / 1_000_000).min(62) as u8,
+        Class::Nrt => 63,
+    }
+}
+
+/// The frame streams of `sc` under this baseline, for the response-time analysis
+/// (`rta`): single-frame HRT topics with their worst-case frame time, minimum
+/// inter-arrival (the period shortened by the largest clock drift) and release jitter
+/// (timer interrupt, plus the abort report when a mailbox must be freed: two interrupt
+/// latencies); every other frame as a possible blocker (8 data bytes). Returns the
+/// streams and, per stream, the index in `sc.topics` of the HRT topic it analyses.
+pub fn rta_streams(sc: &Scenario, cfg: &SimConfig) -> (Vec<Stream>, Vec<Option<usize>>) {
+    let bitrate = sc.bus().map_or(1_000_000, |b| b.bitrate);
+    let drift = 1.0 - cfg.drift_ppm.abs() * 1e-6;
+    let mut streams = Vec::new();
+    let mut which = Vec::new();
+    for (i, t) in sc.topics.iter().enumerate() {
+        let period = (t.class == Class::Hrt && t.period_ns > 0).then_some(t.period_ns);
+        let prio = priority(t.class, period, t.deadline_ns);
+        let single = fragment_count(t.size) == 1;
+        let key = CanId::new(prio, t.msg_id, 0).map_or(u32::MAX, CanId::raw);
+        let dlc = if single { t.size.min(8) as u8 } else { 8 };
+        let (t_ns, j_ns, analysed) = match period {
+            Some(p) if single => ((p as f64 * drift) as Nanos, 2 * cfg.irq_latency_ns, true),
+            // Not analysed: they block (lower priority than every HRT frame) and never
+            // interfere with an HRT frame.
+            _ => (Nanos::MAX, 0, false),
+        };
+        streams.push(Stream {
+            name: format!("{}@n{}", t.label, t.node),
+            key,
+            c_ns: worst_case_ns(dlc, bitrate),
+            t_ns,
+            j_ns,
+        });
+        which.push(analysed.then_some(i));
+    }
+    (streams, which)
+}
+
 /// A node of the fixed-priority baseline.
 pub struct FixedNode<'t> {
     tables: &'t OwnedTables,
@@ -31,8 +96,12 @@ pub struct FixedNode<'t> {
     hrt_next: Vec<Option<(Nanos, Nanos)>>,
     queue: Vec<Msg>,
     mailboxes: [bool; MAILBOXES],
+    /// Abort requested on the mailbox, result not yet reported.
+    aborting: [bool; MAILBOXES],
     /// Messages dropped at their deadline, HRT and SRT.
     pub dropped: u64,
+    /// Mailboxes aborted for a higher-priority frame.
+    pub aborts: u64,
 }
 
 impl<'t> FixedNode<'t> {
@@ -61,7 +130,9 @@ impl<'t> FixedNode<'t> {
             hrt_next,
             queue: Vec::new(),
             mailboxes: [false; MAILBOXES],
+            aborting: [false; MAILBOXES],
             dropped: 0,
+            aborts: 0,
         }
     }
 
@@ -69,18 +140,13 @@ impl<'t> FixedNode<'t> {
         let Some(t) = self.tables.tx.get(usize::from(tx)) else {
             return 63;
         };
-        match t.class {
-            // Rate monotonic, 1 ms → 1, 10 ms → 10, capped below every SRT priority.
-            Class::Hrt => self
-                .hrt_next
-                .get(usize::from(tx))
-                .copied()
-                .flatten()
-                .map_or(1, |(_, p)| (p / 1_000_000).clamp(1, 20) as u8),
-            // Deadline monotonic, above 20.
-            Class::Srt => (21 + t.deadline_ns / 1_000_000).min(62) as u8,
-            Class::Nrt => 63,
-        }
+        let period = self
+            .hrt_next
+            .get(usize::from(tx))
+            .copied()
+            .flatten()
+            .map(|(_, p)| p);
+        priority(t.class, period, t.deadline_ns)
     }
 
     fn enqueue(&mut self, tx: u8, token: Token, deadline: Nanos) {
@@ -150,6 +216,49 @@ impl<'t> FixedNode<'t> {
             }
             can.load(Mailbox(free as u8), &frame);
         }
+        self.preempt(can);
+    }
+
+    fn msg_id(&self, tx: u8) -> u16 {
+        self.tables
+            .tx
+            .get(usize::from(tx))
+            .map_or(u16::MAX, |t| t.msg_id.0)
+    }
+
+    /// Every mailbox free and the best waiting frame still outranked by a loaded one:
+    /// aborts the lowest-priority loaded mailbox (one abort at a time per waiting frame).
+    fn preempt(&mut self, can: &mut SimController) {
+        if self.mailboxes.iter().any(|b| !b) {
+            return;
+        }
+        let pending_aborts = self.aborting.iter().filter(|a| **a).count();
+        let mut waiting: Vec<u32> = self
+            .queue
+            .iter()
+            .filter(|m| m.loaded.is_none())
+            .map(|m| m.key(self.msg_id(m.tx)))
+            .collect();
+        waiting.sort_unstable();
+        // Waiting frames that an abort already requested will make room for.
+        for &best in waiting.iter().skip(pending_aborts) {
+            let worst = self
+                .queue
+                .iter()
+                .filter_map(|m| m.loaded.map(|mb| (m.key(self.msg_id(m.tx)), mb)))
+                .filter(|&(_, mb)| !self.aborting.get(mb).copied().unwrap_or(true))
+                .max();
+            match worst {
+                Some((key, mb)) if key > best => {
+                    if let Some(a) = self.aborting.get_mut(mb) {
+                        *a = true;
+                    }
+                    self.aborts += 1;
+                    can.abort(Mailbox(mb as u8));
+                }
+                _ => break,
+            }
+        }
     }
 
     fn next(&self) -> Option<Nanos> {
@@ -175,6 +284,8 @@ impl Module for FixedNode<'_> {
                 if let Some(slot) = self.hrt_next.get_mut(tx) {
                     *slot = Some((due + period, period));
                 }
+                // The sample is released now (stamped with its due time).
+                self.host.now_local = due;
                 if let Some(token) = self.host.hrt_sample(tx as u8) {
                     self.enqueue(tx as u8, token, due + period);
                 }
@@ -212,6 +323,9 @@ impl Module for FixedNode<'_> {
         let mb = usize::from(mailbox.0);
         if let Some(b) = self.mailboxes.get_mut(mb) {
             *b = false;
+        }
+        if let Some(a) = self.aborting.get_mut(mb) {
+            *a = false;
         }
         if let Some(i) = self.queue.iter().position(|m| m.loaded == Some(mb)) {
             let finished = match self.queue.get_mut(i) {

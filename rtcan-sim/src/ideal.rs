@@ -1,74 +1,121 @@
-//! Bound (c): non-preemptive EDF with global knowledge over the free windows. One
+//! Reference (c): non-preemptive EDF with global knowledge over the free windows. One
 //! omniscient scheduler sees every released SRT message of every node, knows the exact
 //! length of each frame, and at every instant of a free window sends the next frame of
 //! the earliest-deadline message that can still make its deadline and whose frame ends
 //! before the window does (guard included). No arbitration, no interrupt latency, no
-//! clock error, no heartbeats: it is an upper bound for any distributed policy on the
-//! same windows, not something a CAN bus can do.
+//! clock error, no heartbeats.
+//!
+//! What it is not: an upper bound. Non-preemptive EDF is not optimal once messages are
+//! dropped (it sends the earliest deadline first, even when that message makes a later,
+//! larger set miss), and it is greedy within a window (it never idles to let a later
+//! release with an earlier deadline go first). A distributed policy that fits frames to
+//! window ends and drops hopeless messages early can, and at overload does, deliver
+//! more on time (README, `rtcan sim --scenario rtcan-paper --sweep`). It is a
+//! centralised reference with perfect information, not something a CAN bus can do.
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
 use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
 use rtcan_core::timing::{bits_to_ns, exact_bits, INTERMISSION_BITS};
 use rtcan_core::{CanId, Class, Frame, Nanos};
 
 use crate::bus::WireFrame;
+use crate::metrics::{Meter, TopicInfo};
 use crate::run::Scenario;
 use crate::slots::free_windows;
-use crate::traffic::fill_payload;
+use crate::traffic::{fill_payload, EventStream};
 
 struct Msg {
     node: usize,
-    release: Nanos,
     deadline: Nanos,
     frames: Vec<(Frame, Nanos)>,
     next: usize,
 }
 
-/// Schedules the SRT `events` ((node, tx) → global times by sequence number) of `sc`
-/// over its free windows until `end`; returns the frames as they would be on the wire.
-/// Bus time is taken as global time shifted by one slot (the master's start).
+/// The frames of event `seq` of `t` with their durations (intermission excluded), in
+/// the order they are sent, laxity code 1.
+fn frames_of(t: &TopicInfo, seq: u32, bitrate: u32, ifs: Nanos) -> Vec<(Frame, Nanos)> {
+    let mut payload = vec![0u8; t.size];
+    fill_payload(&mut payload, seq, t.node as u8, t.tx);
+    let crc = if t.size > 8 { crc16(&payload) } else { 0 };
+    (0..fragment_count(t.size))
+        .rev()
+        .filter_map(|c| {
+            let mut data = [0u8; 8];
+            let dlc = fragment_data(&payload, crc, c, &mut data);
+            let f = Frame::from_parts(CanId::new(1, t.msg_id, c)?, dlc, data)?;
+            Some((f, bits_to_ns(exact_bits(&f), bitrate) - ifs))
+        })
+        .collect()
+}
+
+/// Every SRT event of `sc` with `seed`, merged in release order (ties in topic order),
+/// as (release, topic index, sequence number).
+struct Releases {
+    streams: Vec<(usize, EventStream)>,
+    heap: BinaryHeap<Reverse<(Nanos, usize, usize)>>,
+}
+
+impl Releases {
+    fn new(sc: &Scenario, seed: u64) -> Self {
+        let mut streams = Vec::new();
+        for (ti, t) in sc.topics.iter().enumerate() {
+            if t.class != Class::Srt {
+                continue;
+            }
+            let gen = sc
+                .gens
+                .get(t.node)
+                .and_then(|g| g.iter().find(|g| g.tx == t.tx));
+            if let Some(g) = gen {
+                streams.push((ti, EventStream::new(*g, seed, t.node as u8)));
+            }
+        }
+        let heap = streams
+            .iter()
+            .enumerate()
+            .map(|(k, (ti, s))| Reverse((s.peek(), *ti, k)))
+            .collect();
+        Releases { streams, heap }
+    }
+
+    fn peek(&self) -> Nanos {
+        self.heap.peek().map_or(Nanos::MAX, |r| r.0 .0)
+    }
+
+    fn pop(&mut self) -> Option<(Nanos, usize, u32)> {
+        let Reverse((at, ti, k)) = self.heap.pop()?;
+        let (_, s) = self.streams.get_mut(k)?;
+        let (seq, t) = s.next()?;
+        debug_assert_eq!(t, at);
+        if s.peek() != Nanos::MAX {
+            self.heap.push(Reverse((s.peek(), ti, k)));
+        }
+        Some((at, ti, seq))
+    }
+}
+
+/// Schedules the SRT events of `sc` (regenerated from its generators with `seed`) over
+/// its free windows until `end`, feeding the meter the events and the frames as they
+/// would be on the wire, and `sink` each frame. Bus time is taken as global time
+/// shifted by one slot (the master's start). Memory: the messages released and not
+/// finished, bounded by rates and deadlines.
 pub fn schedule(
     sc: &Scenario,
-    events: &std::collections::HashMap<(usize, u8), Vec<Nanos>>,
+    seed: u64,
     end: Nanos,
-) -> Vec<WireFrame> {
+    meter: &mut Meter,
+    mut sink: impl FnMut(&WireFrame),
+) {
     let Some(bus) = sc.bus() else {
-        return Vec::new();
+        return;
     };
     let ifs = bits_to_ns(INTERMISSION_BITS, bus.bitrate);
-    let mut msgs: Vec<Msg> = Vec::new();
-    for t in sc.topics.iter().filter(|t| t.class == Class::Srt) {
-        let Some(times) = events.get(&(t.node, t.tx)) else {
-            continue;
-        };
-        for (seq, &at) in times.iter().enumerate() {
-            let mut payload = vec![0u8; t.size];
-            fill_payload(&mut payload, seq as u32, t.node as u8, t.tx);
-            let crc = if t.size > 8 { crc16(&payload) } else { 0 };
-            let n = fragment_count(t.size);
-            let frames = (0..n)
-                .rev()
-                .filter_map(|c| {
-                    let mut data = [0u8; 8];
-                    let dlc = fragment_data(&payload, crc, c, &mut data);
-                    let f = Frame::from_parts(CanId::new(1, t.msg_id, c)?, dlc, data)?;
-                    Some((f, bits_to_ns(exact_bits(&f), bus.bitrate) - ifs))
-                })
-                .collect();
-            msgs.push(Msg {
-                node: t.node,
-                release: at,
-                deadline: at + t.deadline_ns,
-                frames,
-                next: 0,
-            });
-        }
-    }
-    msgs.sort_by_key(|m| m.release);
+    let mut rel = Releases::new(sc, seed);
     let windows = free_windows(&bus, sc.masks());
     let hyper = bus.cycle_ns() * sc.masks().len().max(1) as u64;
     let origin = bus.slot_ns;
-    let mut out = Vec::new();
-    let mut released = 0usize;
-    let mut active: Vec<usize> = Vec::new();
+    let mut active: Vec<Msg> = Vec::new();
     let mut base = 0u64;
     'outer: loop {
         for &(ws, wl) in &windows {
@@ -77,42 +124,50 @@ pub fn schedule(
             if w_start >= end {
                 break 'outer;
             }
+            meter.expire(w_start);
             let mut t = w_start;
             loop {
-                while msgs.get(released).is_some_and(|m| m.release <= t) {
-                    active.push(released);
-                    released += 1;
+                while rel.peek() <= t {
+                    let Some((at, ti, seq)) = rel.pop() else {
+                        break;
+                    };
+                    let Some(tp) = sc.topics.get(ti) else {
+                        continue;
+                    };
+                    meter.event(tp.node, tp.tx, seq, at);
+                    active.push(Msg {
+                        node: tp.node,
+                        deadline: at + tp.deadline_ns,
+                        frames: frames_of(tp, seq, bus.bitrate, ifs),
+                        next: 0,
+                    });
                 }
                 // Drop hopeless messages (remaining exact time cannot make the deadline).
-                active.retain(|&i| {
-                    msgs.get(i).is_some_and(|m| {
-                        let rest: Nanos = m.frames.iter().skip(m.next).map(|f| f.1 + ifs).sum();
-                        t + rest.saturating_sub(ifs) <= m.deadline
-                    })
+                active.retain(|m| {
+                    let rest: Nanos = m.frames.iter().skip(m.next).map(|f| f.1 + ifs).sum();
+                    t + rest.saturating_sub(ifs) <= m.deadline
                 });
                 let pick = active
                     .iter()
                     .enumerate()
-                    .filter(|(_, &i)| {
-                        msgs.get(i)
-                            .and_then(|m| m.frames.get(m.next))
-                            .is_some_and(|f| t + f.1 <= w_end)
-                    })
-                    .min_by_key(|(_, &i)| msgs.get(i).map_or(Nanos::MAX, |m| m.deadline))
-                    .map(|(k, &i)| (k, i));
+                    .filter(|(_, m)| m.frames.get(m.next).is_some_and(|f| t + f.1 <= w_end))
+                    .min_by_key(|(_, m)| m.deadline)
+                    .map(|(k, _)| k);
                 match pick {
-                    Some((k, i)) => {
-                        let Some(m) = msgs.get_mut(i) else { break };
+                    Some(k) => {
+                        let Some(m) = active.get_mut(k) else { break };
                         let Some(&(frame, dur)) = m.frames.get(m.next) else {
                             break;
                         };
-                        out.push(WireFrame {
+                        let w = WireFrame {
                             sof: t,
                             end: t + dur,
                             node: m.node,
                             frame,
                             ok: true,
-                        });
+                        };
+                        meter.frame(&w);
+                        sink(&w);
                         m.next += 1;
                         if m.next == m.frames.len() {
                             active.swap_remove(k);
@@ -120,7 +175,7 @@ pub fn schedule(
                         t += dur + ifs;
                     }
                     None => {
-                        let next_rel = msgs.get(released).map_or(Nanos::MAX, |m| m.release);
+                        let next_rel = rel.peek();
                         if next_rel < w_end {
                             t = t.max(next_rel);
                         } else {
@@ -135,40 +190,25 @@ pub fn schedule(
         }
         base += hyper;
     }
-    out
 }
 
-/// Bus time the SRT events released in `[from, to)` need: exact frame lengths (stuffing
-/// on the real bits, laxity code 1) plus intermissions, ns.
-pub fn offered_ns(
-    sc: &Scenario,
-    events: &std::collections::HashMap<(usize, u8), Vec<Nanos>>,
-    from: Nanos,
-    to: Nanos,
-) -> Nanos {
+/// Bus time the SRT events (regenerated with `seed`) released in `[from, to)` need:
+/// exact frame lengths (stuffing on the real bits, laxity code 1) plus intermissions, ns.
+pub fn offered_ns(sc: &Scenario, seed: u64, from: Nanos, to: Nanos) -> Nanos {
     let Some(bus) = sc.bus() else { return 0 };
+    let ifs = bits_to_ns(INTERMISSION_BITS, bus.bitrate);
+    let mut rel = Releases::new(sc, seed);
     let mut total = 0;
-    for t in sc.topics.iter().filter(|t| t.class == Class::Srt) {
-        let Some(times) = events.get(&(t.node, t.tx)) else {
-            continue;
+    while rel.peek() < to {
+        let Some((at, ti, seq)) = rel.pop() else {
+            break;
         };
-        for (seq, _) in times
-            .iter()
-            .enumerate()
-            .filter(|(_, &at)| at >= from && at < to)
-        {
-            let mut payload = vec![0u8; t.size];
-            fill_payload(&mut payload, seq as u32, t.node as u8, t.tx);
-            let crc = if t.size > 8 { crc16(&payload) } else { 0 };
-            for c in 0..fragment_count(t.size) {
-                let mut data = [0u8; 8];
-                let dlc = fragment_data(&payload, crc, c, &mut data);
-                if let Some(f) =
-                    CanId::new(1, t.msg_id, c).and_then(|id| Frame::from_parts(id, dlc, data))
-                {
-                    total += bits_to_ns(exact_bits(&f), bus.bitrate);
-                }
-            }
+        let Some(t) = sc.topics.get(ti) else { continue };
+        if at >= from {
+            total += frames_of(t, seq, bus.bitrate, ifs)
+                .iter()
+                .map(|f| f.1 + ifs)
+                .sum::<Nanos>();
         }
     }
     total

@@ -26,6 +26,7 @@ pub mod policy;
 pub mod report;
 pub mod rng;
 pub mod robot;
+pub mod rta;
 pub mod run;
 pub mod session;
 pub mod slots;

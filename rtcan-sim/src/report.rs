@@ -16,19 +16,24 @@ pub fn text(run: &Run) -> String {
     if !f.hrt.is_empty() {
         let _ = writeln!(
             s,
-            "HRT message        count  misses  mean period [us]  std dev [us]  jitter min/max [us]"
+            "HRT message        count  misses    late  missed  mean period [us]  std dev [us]  jitter min/max [us]  max resp. [us]"
         );
+        let opt = |v: Option<u64>| v.map_or("-".to_string(), |v| v.to_string());
         for h in &f.hrt {
             let _ = writeln!(
                 s,
-                "{:<16} {:>7} {:>7} {:>17.2} {:>13.3} {:>10.3} / {:.3}",
+                "{:<16} {:>7} {:>7} {:>7} {:>7} {:>17.2} {:>13.3} {:>10.3} / {:<8.3} {:>14}",
                 h.name,
                 h.count,
                 h.misses,
+                opt(h.late),
+                opt(h.missed),
                 us(h.mean_period_ns),
                 us(h.std_period_ns),
                 us(h.jitter_min_ns as f64),
-                us(h.jitter_max_ns as f64)
+                us(h.jitter_max_ns as f64),
+                h.max_response_ns
+                    .map_or("-".to_string(), |r| format!("{:.3}", us(r as f64)))
             );
         }
     }
@@ -81,18 +86,27 @@ pub fn comparison_text(c: &Comparison) -> String {
     );
     let _ = writeln!(
         s,
-        "policy            SRT on time  miss ratio  mean latency [ms]  HRT misses  overlaps"
+        "policy            SRT on time  miss ratio  mean latency [ms]  HRT misses  HRT late  HRT missed  overlaps"
     );
     for r in &c.runs {
-        let hrt_miss: u64 = r.figures.hrt.iter().map(|h| h.misses).sum();
+        let hrt = &r.figures.hrt;
+        let hrt_miss: u64 = hrt.iter().map(|h| h.misses).sum();
+        let sum = |f: &dyn Fn(&crate::metrics::HrtStats) -> Option<u64>| -> String {
+            hrt.iter()
+                .map(f)
+                .sum::<Option<u64>>()
+                .map_or("-".into(), |v| v.to_string())
+        };
         let _ = writeln!(
             s,
-            "{:<16} {:>12} {:>10.2}% {:>18.3} {:>11} {:>9}",
+            "{:<16} {:>12} {:>10.2}% {:>18.3} {:>11} {:>9} {:>11} {:>9}",
             r.policy,
             on_time(r),
             100.0 * miss_ratio(r),
             mean_latency_ns(r) / 1e6,
             hrt_miss,
+            sum(&|h| h.late),
+            sum(&|h| h.missed),
             r.overlaps
         );
     }
@@ -131,10 +145,14 @@ pub fn run_json(run: &Run) -> String {
         .iter()
         .map(|h| {
             format!(
-                "{{\"name\":{},\"count\":{},\"misses\":{},\"mean_period_us\":{},\"std_period_us\":{},\"jitter_min_us\":{},\"jitter_max_us\":{}}}",
+                "{{\"name\":{},\"count\":{},\"misses\":{},\"late\":{},\"missed\":{},\"max_response_us\":{},\"mean_period_us\":{},\"std_period_us\":{},\"jitter_min_us\":{},\"jitter_max_us\":{}}}",
                 json_str(&h.name),
                 h.count,
                 h.misses,
+                h.late.map_or("null".into(), |v| v.to_string()),
+                h.missed.map_or("null".into(), |v| v.to_string()),
+                h.max_response_ns
+                    .map_or("null".into(), |r| num(us(r as f64))),
                 num(us(h.mean_period_ns)),
                 num(us(h.std_period_ns)),
                 num(us(h.jitter_min_ns as f64)),

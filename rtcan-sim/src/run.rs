@@ -1,5 +1,4 @@
 //! Running a scenario under one policy and measuring it.
-use std::collections::HashMap;
 
 use rtcan_core::counters::Counters;
 use rtcan_core::engine::Policy;
@@ -12,7 +11,7 @@ use crate::bus::{Bus, BusStats, Module, NodeSetup, WireFrame};
 use crate::clock::NodeClock;
 use crate::fixed::FixedNode;
 use crate::ideal;
-use crate::metrics::{compute, Figures, TopicInfo, Window};
+use crate::metrics::{Figures, Meter, TopicInfo, Window};
 use crate::policy::PolicyKind;
 use crate::slots::overlaps;
 use crate::tables::OwnedTables;
@@ -115,8 +114,6 @@ pub struct Run {
     pub rx_ok: u64,
     /// See `rx_ok`.
     pub rx_bad: u64,
-    /// Events per (node, tx): global times by sequence number.
-    pub events: HashMap<(usize, u8), Vec<Nanos>>,
     /// Simulated span, ns.
     pub sim_ns: Nanos,
 }
@@ -143,7 +140,10 @@ pub fn run_engine(
             cfg,
             kind,
             |t, host, clock| SizedNode::new(t, policy, host, clock.local(0)),
-            |m| (m.host(), Some(m.counters())),
+            |m| {
+                let c = m.counters();
+                (m.host_mut(), Some(c))
+            },
             |m| Some(m.clock()),
         )
     };
@@ -176,19 +176,26 @@ pub fn run_fixed(sc: &Scenario, cfg: &SimConfig) -> Result<Run, String> {
                 .collect();
             Ok(FixedNode::new(t, host, &periods))
         },
-        |m| (&m.host, None),
+        |m| (&mut m.host, None),
         |_| None,
     )
 }
 
-/// Runs `sc` with the bound (c): the engine run's event trace scheduled by the
-/// omniscient EDF; HRT figures are those of `engine_run` (same TDMA).
+/// Runs `sc` under the reference (c): the omniscient EDF over the free windows, on the
+/// same event trace (regenerated from the same streams); HRT figures are those of
+/// `engine_run` (same TDMA).
 pub fn run_ideal(sc: &Scenario, cfg: &SimConfig, engine_run: &Run) -> Run {
-    let wire = ideal::schedule(sc, &engine_run.events, cfg.end_ns());
     let bit_ns = sc
         .bus()
         .map_or(1_000, |b| rtcan_core::timing::bits_to_ns(1, b.bitrate));
-    let mut figures = compute(&wire, &sc.topics, &engine_run.events, window(cfg), bit_ns);
+    let mut meter = Meter::new(&sc.topics, window(cfg), bit_ns);
+    let mut wire = Vec::new();
+    ideal::schedule(sc, cfg.seed, cfg.end_ns(), &mut meter, |w| {
+        if cfg.record_wire {
+            wire.push(*w);
+        }
+    });
+    let mut figures = meter.finish();
     figures.hrt = engine_run.figures.hrt.clone();
     figures.load.sync = engine_run.figures.load.sync;
     figures.load.hrt = engine_run.figures.load.hrt;
@@ -196,13 +203,29 @@ pub fn run_ideal(sc: &Scenario, cfg: &SimConfig, engine_run: &Run) -> Run {
         policy: PolicyKind::IdealEdf.name(),
         figures,
         overlaps: 0,
-        wire: if cfg.record_wire { wire } else { Vec::new() },
+        wire,
         bus: BusStats::default(),
         counters: Vec::new(),
         rx_ok: 0,
         rx_bad: 0,
-        events: engine_run.events.clone(),
         sim_ns: cfg.end_ns(),
+    }
+}
+
+/// Simulated time between two hand-overs of events and frames to the meter: what is
+/// kept in between is bounded by this span, not by the run.
+pub const CHUNK_NS: Nanos = 50_000_000;
+
+/// Hands node `n`'s logged events and HRT releases to the meter.
+fn drain_host(meter: &mut Meter, n: usize, host: &mut TrafficHost) {
+    let clock = *host.clock();
+    for (tx, log) in host.topics.iter_mut().enumerate() {
+        for (seq, at) in log.events.drain(..) {
+            meter.event(n, tx as u8, seq, at);
+        }
+        for (seq, local) in log.released.drain(..) {
+            meter.release(n, tx as u8, seq, clock.global_at(local));
+        }
     }
 }
 
@@ -211,7 +234,7 @@ fn run_bus<'t, M: Module>(
     cfg: &SimConfig,
     kind: PolicyKind,
     make: impl Fn(&'t OwnedTables, TrafficHost, NodeClock) -> Result<M, String>,
-    parts: impl Fn(&M) -> (&TrafficHost, Option<Counters>),
+    parts: impl Fn(&mut M) -> (&mut TrafficHost, Option<Counters>),
     slot_clock: impl Fn(&M) -> Option<&SlotClock>,
 ) -> Result<Run, String> {
     let bitrate = sc.bus().map_or(1_000_000, |b| b.bitrate);
@@ -230,50 +253,62 @@ fn run_bus<'t, M: Module>(
         );
     }
     let end = cfg.end_ns();
-    bus.run_until(end);
-    let mut events = HashMap::new();
+    let mut meter = Meter::new(&sc.topics, window(cfg), bus.bit_ns());
+    let mut kept = Vec::new();
+    let mut ov = 0;
+    let mut t = 0;
+    while t < end {
+        t = (t + CHUNK_NS).min(end);
+        bus.run_until(t);
+        // Events before the frames that carry them.
+        for n in 0..bus.len() {
+            if let Some(m) = bus.module_mut(n) {
+                drain_host(&mut meter, n, parts(m).0);
+            }
+        }
+        for w in &bus.wire {
+            meter.frame(w);
+        }
+        ov += match (
+            bus.module(sc.master).and_then(&slot_clock),
+            bus.clock(sc.master),
+            sc.bus(),
+        ) {
+            (Some(sclock), Some(c0), Some(bc)) => {
+                let start = c0.local(0) + bc.slot_ns;
+                overlaps(&bus.wire, &bc, sc.masks(), |g| {
+                    let l = c0.local(g);
+                    (l >= start).then(|| sclock.to_bus(l))
+                })
+            }
+            _ => 0,
+        };
+        if cfg.record_wire {
+            kept.append(&mut bus.wire);
+        } else {
+            bus.wire.clear();
+        }
+        meter.expire(t);
+    }
     let mut counters = Vec::new();
     let (mut rx_ok, mut rx_bad) = (0, 0);
     for n in 0..bus.len() {
-        if let Some(m) = bus.module(n) {
+        if let Some(m) = bus.module_mut(n) {
             let (host, c) = parts(m);
-            for (tx, log) in host.topics.iter().enumerate() {
-                events.insert((n, tx as u8), log.events.clone());
-            }
             counters.extend(c);
             rx_ok += host.rx_ok;
             rx_bad += host.rx_bad;
         }
     }
-    let figures = compute(&bus.wire, &sc.topics, &events, window(cfg), bus.bit_ns());
-    let ov = match (
-        bus.module(sc.master).and_then(&slot_clock),
-        bus.clock(sc.master),
-        sc.bus(),
-    ) {
-        (Some(sclock), Some(c0), Some(bc)) => {
-            let start = c0.local(0) + bc.slot_ns;
-            overlaps(&bus.wire, &bc, sc.masks(), |g| {
-                let l = c0.local(g);
-                (l >= start).then(|| sclock.to_bus(l))
-            })
-        }
-        _ => 0,
-    };
     Ok(Run {
         policy: kind.name(),
-        figures,
+        figures: meter.finish(),
         overlaps: ov,
-        wire: if cfg.record_wire {
-            std::mem::take(&mut bus.wire)
-        } else {
-            Vec::new()
-        },
+        wire: kept,
         bus: bus.stats,
         counters,
         rx_ok,
         rx_bad,
-        events,
         sim_ns: end,
     })
 }

@@ -218,7 +218,12 @@ pub fn srt_latency(run: &Run) -> String {
         .map(|c| {
             (
                 c.name.clone(),
-                c.latencies_ns.iter().map(|&l| l as f64 / 1e6).collect(),
+                c.latency
+                    .sample
+                    .values
+                    .iter()
+                    .map(|&l| l as f64 / 1e6)
+                    .collect(),
             )
         })
         .collect();

@@ -95,6 +95,74 @@ impl Gen {
     }
 }
 
+impl Gen {
+    /// The random stream of this generator on node `node` (each generator its own, so
+    /// the event trace of a seed is the same whatever runs it).
+    pub fn rng(&self, seed: u64, node: u8) -> Rng {
+        Rng::new(seed, (u64::from(node) << 8) | u64::from(self.tx))
+    }
+
+    /// Global time of the first event (`Nanos::MAX`: none), drawn from `rng`.
+    pub fn first(&self, rng: &mut Rng) -> Nanos {
+        match self.kind {
+            GenKind::Hrt => Nanos::MAX,
+            GenKind::Random { lo, hi } => self.start_ns + rng.range(lo, hi),
+            GenKind::Periodic { period } => self.start_ns + rng.range(0, period),
+        }
+    }
+
+    /// Global time of the event after the one at `at`, drawn from `rng`.
+    pub fn next(&self, rng: &mut Rng, at: Nanos) -> Nanos {
+        match self.kind {
+            GenKind::Hrt => Nanos::MAX,
+            GenKind::Random { lo, hi } => at + rng.range(lo, hi).max(1),
+            GenKind::Periodic { period } => at + period.max(1),
+        }
+    }
+}
+
+/// The events of one generator in order, as (sequence number, global time): the trace a
+/// `TrafficHost` produces, without running anything.
+pub struct EventStream {
+    gen: Gen,
+    rng: Rng,
+    next: Nanos,
+    seq: u32,
+}
+
+impl EventStream {
+    /// Events of `gen` on node `node` with `seed`.
+    pub fn new(gen: Gen, seed: u64, node: u8) -> Self {
+        let mut rng = gen.rng(seed, node);
+        let next = gen.first(&mut rng);
+        EventStream {
+            gen,
+            rng,
+            next,
+            seq: 0,
+        }
+    }
+
+    /// Time of the next event without taking it.
+    pub fn peek(&self) -> Nanos {
+        self.next
+    }
+}
+
+impl Iterator for EventStream {
+    type Item = (u32, Nanos);
+    fn next(&mut self) -> Option<(u32, Nanos)> {
+        if self.next == Nanos::MAX {
+            return None;
+        }
+        let at = self.next;
+        let seq = self.seq;
+        self.seq = self.seq.wrapping_add(1);
+        self.next = self.gen.next(&mut self.rng, at);
+        Some((seq, at))
+    }
+}
+
 /// Byte `i` of the identity payload of event `seq` of (`node`, `tx`).
 fn payload_byte(i: usize, seq: u32, node: u8, tx: u8) -> u8 {
     match i {
@@ -156,8 +224,10 @@ impl GenState {
 /// Per-topic tallies kept by a generator host.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct TopicLog {
-    /// Global time of each SRT event, indexed by sequence number.
-    pub events: Vec<Nanos>,
+    /// SRT events since the last drain: (sequence number, global time).
+    pub events: Vec<(u32, Nanos)>,
+    /// HRT samples handed out since the last drain: (sequence number, local time).
+    pub released: Vec<(u32, Nanos)>,
     /// Events the engine refused (queue full).
     pub refused: u64,
     /// Events the engine dropped (deadline).
@@ -185,6 +255,8 @@ pub struct TrafficHost {
     pub rx_bad: u64,
     /// Protocol events seen.
     pub events: Vec<Event>,
+    /// Local time of the driver event being handled (HRT samples are stamped with it).
+    pub now_local: Nanos,
 }
 
 impl TrafficHost {
@@ -193,12 +265,8 @@ impl TrafficHost {
         let gens: Vec<GenState> = gens
             .iter()
             .map(|g| {
-                let mut rng = Rng::new(seed, (u64::from(node) << 8) | u64::from(g.tx));
-                let first = match g.kind {
-                    GenKind::Hrt => Nanos::MAX,
-                    GenKind::Random { lo, hi } => g.start_ns + rng.range(lo, hi),
-                    GenKind::Periodic { period } => g.start_ns + rng.range(0, period),
-                };
+                let mut rng = g.rng(seed, node);
+                let first = g.first(&mut rng);
                 let mut st = GenState {
                     gen: *g,
                     rng,
@@ -231,7 +299,13 @@ impl TrafficHost {
             rx_ok: 0,
             rx_bad: 0,
             events: Vec::new(),
+            now_local: 0,
         }
+    }
+
+    /// This node's clock.
+    pub fn clock(&self) -> &NodeClock {
+        &self.clock
     }
 
     fn alloc(&mut self, size: usize, seq: u32, tx: u8) -> Token {
@@ -277,14 +351,10 @@ impl TrafficHost {
             .find(|g| g.next_global != Nanos::MAX && g.next_local <= now)?;
         let (tx, size, seq, at) = (st.gen.tx, st.gen.size, st.seq, st.next_global);
         st.seq = st.seq.wrapping_add(1);
-        let next = match st.gen.kind {
-            GenKind::Hrt => Nanos::MAX,
-            GenKind::Random { lo, hi } => at + st.rng.range(lo, hi).max(1),
-            GenKind::Periodic { period } => at + period.max(1),
-        };
+        let next = st.gen.next(&mut st.rng, at);
         st.set_next(&clock, next);
         if let Some(t) = self.topics.get_mut(usize::from(tx)) {
-            t.events.push(at);
+            t.events.push((seq, at));
         }
         self.update_next();
         Some((tx, self.alloc(size, seq, tx)))
@@ -304,6 +374,7 @@ impl Host for TrafficHost {
         let t = self.topics.get_mut(usize::from(tx))?;
         let seq = t.samples as u32;
         t.samples += 1;
+        t.released.push((seq, self.now_local));
         Some(self.alloc(8, seq, tx))
     }
 
@@ -357,6 +428,7 @@ impl<'t, const RX: usize, const ARENA: usize> EngineNode<'t, RX, ARENA> {
     }
 
     fn next(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        self.host.now_local = now;
         let p = self.engine.poll(now, can, &mut self.host);
         let p = (p != Nanos::MAX).then_some(p);
         match (p, self.host.next_local()) {
@@ -372,6 +444,7 @@ impl<const RX: usize, const ARENA: usize> Module for EngineNode<'_, RX, ARENA> {
     }
 
     fn wake(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        self.host.now_local = now;
         while let Some((tx, token)) = self.host.take_due(now) {
             if self
                 .engine
@@ -391,6 +464,7 @@ impl<const RX: usize, const ARENA: usize> Module for EngineNode<'_, RX, ARENA> {
         now: Nanos,
         can: &mut SimController,
     ) -> Option<Nanos> {
+        self.host.now_local = now;
         self.engine.on_rx(frame, sof, can, &mut self.host);
         self.next(now, can)
     }
@@ -402,6 +476,7 @@ impl<const RX: usize, const ARENA: usize> Module for EngineNode<'_, RX, ARENA> {
         now: Nanos,
         can: &mut SimController,
     ) -> Option<Nanos> {
+        self.host.now_local = now;
         self.engine
             .on_tx_done(mailbox, result, now, can, &mut self.host);
         self.next(now, can)
@@ -461,6 +536,11 @@ impl<'t> SizedNode<'t> {
     /// The traffic host.
     pub fn host(&self) -> &TrafficHost {
         each!(self, n => &n.host)
+    }
+
+    /// The traffic host, to drain its logs.
+    pub fn host_mut(&mut self) -> &mut TrafficHost {
+        each!(self, n => &mut n.host)
     }
 
     /// Engine counters.

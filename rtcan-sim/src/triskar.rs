@@ -29,7 +29,7 @@ pub mod module;
 pub mod physics;
 pub mod report;
 
-use module::{App, Script, Shared, SimModule, TriskarModule};
+use module::{App, Fate, Script, Shared, SimModule, SrtLog, TriskarModule};
 use physics::{PathSample, Physics};
 
 /// Scenario parameters.
@@ -200,7 +200,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
                     clock,
                     sh,
                     vec![(robot::gateway::topics::tx::TELEOP, || {
-                        robot::gateway::topics::TELEOP.stats().published
+                        robot::gateway::topics::TELEOP.stats()
                     })],
                 );
                 m.dies_at = cfg.gateway_dies_at_s.map(s_to_ns);
@@ -245,7 +245,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
                 clock,
                 sh,
                 vec![(robot::proximity::topics::tx::VELOCITY, || {
-                    robot::proximity::topics::VELOCITY.stats().published
+                    robot::proximity::topics::VELOCITY.stats()
                 })],
             )),
             _ => Box::new(SimModule::new(
@@ -281,7 +281,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
     bus.run_until(end);
     shared.borrow_mut().physics.advance_to(end);
 
-    let mut events: HashMap<(usize, u8), Vec<Nanos>> = HashMap::new();
+    let mut events: HashMap<(usize, u8), SrtLog> = HashMap::new();
     let mut modules = Vec::new();
     let mut overrides = 0;
     for n in 0..bus.len() {
@@ -301,7 +301,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
     }
     let win = window(&cfg.sim);
     let mut figures = compute(&bus.wire, &sc.topics, &HashMap::new(), win, bus.bit_ns());
-    figures.srt = srt_fifo(&bus.wire, &sc.topics, &events, win);
+    figures.srt = srt_by_fate(&bus.wire, &sc.topics, &events, win);
     let ov = match (bus.module(sc.master), bus.clock(sc.master), sc.bus()) {
         (Some(m), Some(c0), Some(bc)) => {
             let sclock = m.slot_clock();
@@ -332,7 +332,6 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
             counters: modules.iter().map(|m| m.counters).collect(),
             rx_ok: 0,
             rx_bad: 0,
-            events,
             sim_ns: end,
         },
         path,
@@ -352,16 +351,15 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
     }
 }
 
-/// SRT latency per topic from the publication log: the payloads are real messages (no
-/// identity bytes), and one topic's messages leave its engine queue in order, so the
-/// k-th complete transfer on the wire is the k-th publication that was not dropped.
-/// Drops reported by the engine are rare here (a lightly loaded bus); when a transfer
-/// is missing the later ones are matched to earlier events, which overstates latency
-/// and never hides a miss.
-fn srt_fifo(
+/// SRT latency per topic from the publications and their fates (`SrtLog`): the k-th
+/// publication the engine reported sent is the k-th complete transfer of the topic on the
+/// wire (a topic's messages leave the engine in order); a dropped or refused publication
+/// is a miss and shifts nothing; one still pending at the end is a miss if its deadline
+/// fell inside the window.
+fn srt_by_fate(
     wire: &[crate::bus::WireFrame],
     topics: &[TopicInfo],
-    events: &HashMap<(usize, u8), Vec<Nanos>>,
+    logs: &HashMap<(usize, u8), SrtLog>,
     win: crate::metrics::Window,
 ) -> Vec<SrtStats> {
     let mut out = Vec::new();
@@ -373,35 +371,28 @@ fn srt_fifo(
             .filter(|w| w.frame.id().msg_id() == t.msg_id && w.frame.id().fragment() == 0)
             .map(|w| w.end)
             .collect();
-        let ev = events.get(&(t.node, t.tx)).map_or(&[][..], Vec::as_slice);
         let mut st = SrtStats {
             name: t.label.clone(),
             ..SrtStats::default()
         };
-        let mut k = 0;
-        for &at in ev {
-            // Transfers that ended before this event belong to earlier ones.
-            while ends.get(k).is_some_and(|&e| e < at) {
-                k += 1;
-            }
-            let end = ends.get(k).copied();
-            k += 1;
-            if at < win.from || at + t.deadline_ns >= win.to {
-                continue;
-            }
-            st.count += 1;
-            match end {
-                Some(e) => {
-                    let lat = e - at;
-                    st.latencies_ns.push(lat);
-                    if lat > t.deadline_ns {
-                        st.misses += 1;
-                    }
+        let in_window = |at: Nanos| at >= win.from && at + t.deadline_ns < win.to;
+        if let Some(log) = logs.get(&(t.node, t.tx)) {
+            for &(at, fate) in &log.done {
+                if !in_window(at) {
+                    continue;
                 }
-                None => st.misses += 1,
+                match fate {
+                    Fate::Sent(k) => match ends.get(k as usize) {
+                        Some(&e) => st.delivered(e.saturating_sub(at), t.deadline_ns),
+                        None => st.lost(),
+                    },
+                    Fate::Dropped | Fate::Refused => st.lost(),
+                }
+            }
+            for _ in log.pending.iter().filter(|&&at| in_window(at)) {
+                st.lost();
             }
         }
-        st.latencies_ns.sort_unstable();
         out.push(st);
     }
     out

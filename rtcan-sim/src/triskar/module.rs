@@ -9,6 +9,7 @@ use rtcan::core::clock::SlotClock;
 use rtcan::core::counters::Counters;
 use rtcan::core::driver::{Mailbox, TxResult};
 use rtcan::core::{Engine, Frame, Nanos};
+use rtcan::pubsub::topic::TopicStats;
 use rtcan::pubsub::{ModuleHost, SystemStatus};
 use triskar2_nodes::app::{
     GatewayApp, GatewayHw, Motor1App, Motor2App, Motor3App, MotorHw, ProximityApp, ProximityHw,
@@ -177,12 +178,65 @@ pub trait Inspect {
     fn safe_now(&self) -> bool;
     fn app(&self) -> &App;
     /// SRT publications so far, per transmit index.
-    fn srt_events(&self) -> &[(u8, Vec<Nanos>)];
+    fn srt_events(&self) -> &[(u8, SrtLog)];
 }
 
-/// An SRT topic whose publications are logged: tx index, the topic's publication
-/// counter, the count already logged.
-pub type SrtCounter = (u8, fn() -> u32, u32);
+/// An SRT topic whose publications are followed: tx index, how to read the topic's
+/// statistics, the statistics already accounted for.
+pub type SrtCounter = (u8, fn() -> TopicStats, TopicStats);
+
+/// What became of one publication.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fate {
+    /// The engine reported it sent: the `k`-th complete transfer of the topic.
+    Sent(u32),
+    /// Dropped by the engine at (or before, hopeless) its deadline.
+    Dropped,
+    /// Never handed to the engine (its queue for the topic was full, or refused).
+    Refused,
+}
+
+/// The publications of one SRT topic, matched to what happened to them by the topic's
+/// own counters (published, sent, deadline misses, overflows): one topic's messages
+/// leave the engine in publication order, so the fates apply in order, and a lost
+/// message does not shift the later ones.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SrtLog {
+    /// Publications awaiting their fate (global times), oldest first.
+    pub pending: std::collections::VecDeque<Nanos>,
+    /// Publications and their fates, in publication order of the fates.
+    pub done: Vec<(Nanos, Fate)>,
+    sent: u32,
+}
+
+impl SrtLog {
+    /// Accounts for the change from `old` to `new` seen at global time `now`.
+    pub fn update(&mut self, old: &TopicStats, new: &TopicStats, now: Nanos) {
+        let d = |a: u32, b: u32| b.wrapping_sub(a);
+        for _ in 0..d(old.published, new.published) {
+            self.pending.push_back(now);
+        }
+        // Refusals happen as a publication is handed over: the newest ones.
+        let refused = d(old.remote_overflows, new.remote_overflows)
+            + d(old.not_submittable, new.not_submittable);
+        for _ in 0..refused {
+            if let Some(at) = self.pending.pop_back() {
+                self.done.push((at, Fate::Refused));
+            }
+        }
+        for _ in 0..d(old.sent, new.sent) {
+            if let Some(at) = self.pending.pop_front() {
+                self.done.push((at, Fate::Sent(self.sent)));
+                self.sent += 1;
+            }
+        }
+        for _ in 0..d(old.deadline_misses, new.deadline_misses) {
+            if let Some(at) = self.pending.pop_front() {
+                self.done.push((at, Fate::Dropped));
+            }
+        }
+    }
+}
 
 /// A simulated module, generic over the engine sizes the generated code chose.
 pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
@@ -197,7 +251,7 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     pub dies_at: Option<Nanos>,
     /// SRT topics to log: tx index and how to read the topic's publication count.
     pub srt: Vec<SrtCounter>,
-    pub srt_log: Vec<(u8, Vec<Nanos>)>,
+    pub srt_log: Vec<(u8, SrtLog)>,
     was_ok: bool,
     trips: u32,
 }
@@ -212,9 +266,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         status: &'static SystemStatus,
         clock: NodeClock,
         shared: Rc<RefCell<Shared>>,
-        srt: Vec<(u8, fn() -> u32)>,
+        srt: Vec<(u8, fn() -> TopicStats)>,
     ) -> Self {
-        let srt_log = srt.iter().map(|&(tx, _)| (tx, Vec::new())).collect();
+        let srt_log = srt.iter().map(|&(tx, _)| (tx, SrtLog::default())).collect();
         SimModule {
             name,
             engine: Box::new(engine),
@@ -224,7 +278,10 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             clock,
             shared,
             dies_at: None,
-            srt: srt.into_iter().map(|(tx, f)| (tx, f, 0)).collect(),
+            srt: srt
+                .into_iter()
+                .map(|(tx, f)| (tx, f, TopicStats::default()))
+                .collect(),
             srt_log,
             was_ok: false,
             trips: 0,
@@ -257,14 +314,12 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             };
             self.app.poll(now, &mut hw)
         };
-        for (k, (tx, count, seen)) in self.srt.iter_mut().enumerate() {
-            let c = count();
+        for (k, (tx, stats, seen)) in self.srt.iter_mut().enumerate() {
+            let now_stats = stats();
             if let Some((_, log)) = self.srt_log.get_mut(k).filter(|l| l.0 == *tx) {
-                for _ in *seen..c {
-                    log.push(global);
-                }
+                log.update(seen, &now_stats, global);
             }
-            *seen = c;
+            *seen = now_stats;
         }
         let safe = self.status.safe_state_required();
         if !safe {
@@ -350,7 +405,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     fn app(&self) -> &App {
         &self.app
     }
-    fn srt_events(&self) -> &[(u8, Vec<Nanos>)] {
+    fn srt_events(&self) -> &[(u8, SrtLog)] {
         &self.srt_log
     }
 }
