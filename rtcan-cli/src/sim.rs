@@ -92,6 +92,10 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     if !(0.0..1.0).contains(&cfg.bit_error_rate) {
         return Err("--ber must be in [0, 1)".into());
     }
+    // The wire log goes straight to DIR/can0.log while running: memory stays bounded by
+    // the robot, whatever the length of the run (triskar2 keeps its own, docs/SIM.md).
+    cfg.record_wire = false;
+    cfg.wire_log = out.as_ref().map(|d| d.join("can0.log"));
     let which = session::resolve(robot, scenario.as_deref())?;
     if master_dies_at.is_some() && !matches!(which, Which::Triskar { .. }) {
         return Err("--master-dies-at is supported by the triskar2 scenario only".into());
@@ -196,8 +200,11 @@ fn speed_line(s: &Speed) -> String {
     t
 }
 
+/// The plots (and `can0.log` when the run kept its wire instead of streaming it).
 fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
-    write(dir, "can0.log", &candump::log(&run.wire, "can0"))?;
+    if !run.wire.is_empty() {
+        write(dir, "can0.log", &candump::log(&run.wire, "can0"))?;
+    }
     write(
         dir,
         &format!("hrt-jitter-{}.svg", run.policy),

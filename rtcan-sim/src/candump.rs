@@ -33,6 +33,18 @@ pub fn log(wire: &[WireFrame], iface: &str) -> String {
     out
 }
 
+/// Appends the frames that completed on the wire to `out` (as `log`).
+pub fn write(
+    out: &mut impl std::io::Write,
+    wire: &[WireFrame],
+    iface: &str,
+) -> std::io::Result<()> {
+    for w in wire.iter().filter(|w| w.ok) {
+        writeln!(out, "{}", line(w.sof, iface, &w.frame))?;
+    }
+    Ok(())
+}
+
 /// A parsed log line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Entry {

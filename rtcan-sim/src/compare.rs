@@ -24,10 +24,15 @@ pub struct Comparison {
 pub fn paper_comparison(cfg: &SimConfig) -> Result<Comparison, String> {
     let ours_sc = paper::scenario(paper::our_laxity(), cfg.load)?;
     let paper_sc = paper::scenario(paper::PAPER_LAXITY, cfg.load)?;
-    let a = run_engine(&paper_sc, cfg, PolicyKind::Paper, Policy::PAPER)?;
+    // The wire log file, when asked for, is the `ours` run's.
+    let others = SimConfig {
+        wire_log: None,
+        ..cfg.clone()
+    };
+    let a = run_engine(&paper_sc, &others, PolicyKind::Paper, Policy::PAPER)?;
     let b = run_engine(&ours_sc, cfg, PolicyKind::Ours, Policy::OURS)?;
-    let c = run_ideal(&ours_sc, cfg, &b);
-    let d = run_fixed(&ours_sc, cfg)?;
+    let c = run_ideal(&ours_sc, &others, &b);
+    let d = run_fixed(&ours_sc, &others)?;
     let w = window(cfg);
     let (usable, hyper) = window_capacity(&ours_sc);
     let span = w.to.saturating_sub(w.from);
@@ -84,6 +89,7 @@ pub fn paper_sweep(
         let c = SimConfig {
             load,
             record_wire: false,
+            wire_log: None,
             ..cfg.clone()
         };
         out.push(paper_comparison(&c)?);

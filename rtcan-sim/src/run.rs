@@ -32,8 +32,10 @@ pub struct SimConfig {
     pub irq_latency_ns: Nanos,
     /// Largest clock drift of a slave, ppm (slaves get spread values up to it).
     pub drift_ppm: f64,
-    /// Keep the wire log (needed for candump and plots).
+    /// Keep the wire log in `Run::wire` (memory grows with the run).
     pub record_wire: bool,
+    /// Write the wire log as a candump file while running (memory stays bounded).
+    pub wire_log: Option<std::path::PathBuf>,
 }
 
 impl Default for SimConfig {
@@ -46,6 +48,7 @@ impl Default for SimConfig {
             irq_latency_ns: 2_000,
             drift_ppm: 50.0,
             record_wire: true,
+            wire_log: None,
         }
     }
 }
@@ -254,6 +257,15 @@ fn run_bus<'t, M: Module>(
     }
     let end = cfg.end_ns();
     let mut meter = Meter::new(&sc.topics, window(cfg), bus.bit_ns());
+    let mut log = match &cfg.wire_log {
+        Some(p) => Some((
+            std::io::BufWriter::new(
+                std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?,
+            ),
+            p,
+        )),
+        None => None,
+    };
     let mut kept = Vec::new();
     let mut ov = 0;
     let mut t = 0;
@@ -268,6 +280,10 @@ fn run_bus<'t, M: Module>(
         }
         for w in &bus.wire {
             meter.frame(w);
+        }
+        if let Some((out, p)) = &mut log {
+            crate::candump::write(out, &bus.wire, "can0")
+                .map_err(|e| format!("{}: {e}", p.display()))?;
         }
         ov += match (
             bus.module(sc.master).and_then(&slot_clock),
@@ -289,6 +305,9 @@ fn run_bus<'t, M: Module>(
             bus.wire.clear();
         }
         meter.expire(t);
+    }
+    if let Some((mut out, p)) = log {
+        std::io::Write::flush(&mut out).map_err(|e| format!("{}: {e}", p.display()))?;
     }
     let mut counters = Vec::new();
     let (mut rx_ok, mut rx_bad) = (0, 0);

@@ -235,6 +235,7 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             let scenario = paper::scenario(paper::our_laxity(), req.cfg.load)?;
             let quiet = SimConfig {
                 record_wire: false,
+                wire_log: None,
                 ..req.cfg.clone()
             };
             let (_, speed) = timed(req.cfg.seconds, || {
