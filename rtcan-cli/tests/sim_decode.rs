@@ -240,3 +240,40 @@ fn decode_streams_line_by_line() {
     drop(input);
     assert!(child.wait().unwrap().success());
 }
+
+/// `--out` streams can0.log during the run (the wire is not kept in memory): the file
+/// is the same log the library records for the same run.
+#[test]
+fn sim_out_streams_the_same_log_the_run_records() {
+    use rtcan_core::engine::Policy;
+    use rtcan_sim::policy::PolicyKind;
+    use rtcan_sim::run::{run_engine, SimConfig};
+    let dir = tmp("out-log");
+    let (code, _, err) = rtcan(&[
+        "sim",
+        "--scenario",
+        "rtcan-paper",
+        "--seconds",
+        "0.3",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let written = std::fs::read_to_string(dir.join("can0.log")).unwrap();
+    let sc = rtcan_sim::paper::scenario(rtcan_sim::paper::our_laxity(), 1.0).unwrap();
+    let cfg = SimConfig {
+        seconds: 0.3,
+        ..SimConfig::default()
+    };
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
+    assert!(written.lines().count() > 1000);
+    assert_eq!(written, rtcan_sim::candump::log(&run.wire, "can0"));
+    for f in [
+        "report.json",
+        "calendar.svg",
+        "hrt-jitter-ours.svg",
+        "srt-latency-ours.svg",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+}

@@ -189,3 +189,29 @@ fn a_dead_bus_and_trailing_silence_report_hrt_misses() {
         );
     }
 }
+
+/// Issue 9: memory grew with simulated time (every frame, event and latency kept). The
+/// figures now stream: without a recorded wire, a run keeps bounded samples only.
+#[test]
+fn a_run_without_a_wire_log_keeps_bounded_state() {
+    let cfg = SimConfig {
+        seconds: 6.0,
+        record_wire: false,
+        ..SimConfig::default()
+    };
+    let sc = paper::scenario(paper::our_laxity(), 1.0).unwrap();
+    let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
+    assert!(run.wire.is_empty());
+    let cap = rtcan_sim::metrics::RESERVOIR;
+    for h in &run.figures.hrt {
+        assert!(h.jitter_ns.len() <= cap, "{}", h.name);
+        // H_A: 1 000 frames a second, more than the sample holds.
+        if h.name.starts_with("H_A") {
+            assert!(h.count > cap as u64, "{}", h.name);
+            assert_eq!(h.jitter_ns.len(), cap, "{}", h.name);
+        }
+    }
+    let s_a = &run.figures.srt[0];
+    assert!(s_a.latency.n > cap as u64);
+    assert_eq!(s_a.latency.sample.values.len(), cap);
+}
