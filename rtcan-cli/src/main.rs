@@ -9,11 +9,12 @@ usage: rtcan <command> [args]
 commands:
   check <robot.toml> [--json]   validate, admit and plan a robot; print the plan
                                 exit 0 admissible, 1 not admissible, 2 invalid input
-  sim [robot.toml] [--scenario rtcan-paper|file.toml] [--seconds N] [--seed S]
-      [--load X] [--ber P] [--json] [--out DIR] [--sweep]
-                                simulate the robot on a bit-accurate bus (docs/SIM.md)
-  decode <log> --robot robot.toml
-                                candump log -> topic-level messages
+  sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N] [--seed S]
+      [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]
+                                simulate the robot on a bit-accurate bus (docs/SIM.md;
+                                `rtcan sim --help`)
+  decode <log|-> (--robot robot.toml | --scenario rtcan-paper) [--force]
+                                candump log -> topic-level messages (`rtcan decode --help`)
   help                          this text
 ";
 

@@ -8,9 +8,8 @@ use rtcan_core::laxity::LaxityEncoding;
 use rtcan_core::Nanos;
 use rtcan_model::Plan;
 
-use crate::robot::{expand, parse_user, scenario as plan_scenario, Traffic};
+use crate::robot::{expand, parse_user, scale_load, scenario as plan_scenario, Traffic};
 use crate::run::Scenario;
-use crate::traffic::GenKind;
 
 /// The benchmark robot, as shipped.
 pub const ROBOT_TOML: &str = include_str!("../../robots/rtcan-paper.toml");
@@ -58,24 +57,10 @@ pub fn plan(laxity: LaxityEncoding) -> Result<Plan, String> {
     rtcan_model::Robot::parse(ROBOT_FILE, &text).map_err(|d| d.render())
 }
 
-/// Table 2 traffic on `plan` with event rates scaled by `load` (1.0 = Table 2).
-pub fn traffic(plan: &Plan, load: f64) -> Result<Vec<Traffic>, String> {
+/// Table 2 traffic on `plan`.
+pub fn traffic(plan: &Plan) -> Result<Vec<Traffic>, String> {
     let user = parse_user(TRAFFIC_TOML, std::path::Path::new("."))?;
-    let mut t = expand(&user, plan)?;
-    let scale = |ns: Nanos| ((ns as f64 / load) as Nanos).max(1);
-    for x in &mut t {
-        x.kind = match x.kind {
-            GenKind::Random { lo, hi } => GenKind::Random {
-                lo: scale(lo),
-                hi: scale(hi),
-            },
-            GenKind::Periodic { period } => GenKind::Periodic {
-                period: scale(period),
-            },
-            GenKind::Hrt => GenKind::Hrt,
-        };
-    }
-    Ok(t)
+    expand(&user, plan)
 }
 
 /// Report label of a benchmark topic: its name up to the node digit, upper case
@@ -90,8 +75,9 @@ pub fn class_label(name: &str) -> String {
 /// The whole scenario at SRT load `load` with the given laxity encoding.
 pub fn scenario(laxity: LaxityEncoding, load: f64) -> Result<Scenario, String> {
     let p = plan(laxity)?;
-    let t = traffic(&p, load)?;
+    let t = traffic(&p)?;
     let mut sc = plan_scenario(&p, &t)?;
+    scale_load(&mut sc, load);
     for i in &mut sc.topics {
         i.label = class_label(&i.label);
     }
@@ -101,6 +87,7 @@ pub fn scenario(laxity: LaxityEncoding, load: f64) -> Result<Scenario, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::traffic::GenKind;
     use rtcan_core::fragment::wire_len;
 
     #[test]
@@ -167,11 +154,21 @@ mod tests {
         assert_eq!(class_label("h_a1"), "H_A");
         assert_eq!(class_label("s_c3_5"), "S_C");
         let p = plan(our_laxity()).unwrap();
-        let t = traffic(&p, 2.0).unwrap();
+        let t = traffic(&p).unwrap();
         assert_eq!(t.len(), 45);
         let sa = t.iter().find(|x| x.topic == "s_a2_4").unwrap();
         assert_eq!(
             sa.kind,
+            GenKind::Random {
+                lo: 10 * MS,
+                hi: 20 * MS
+            }
+        );
+        // Load 2: twice the rate. Node 1 (bench2), topic 6 = s_a2_4.
+        let sc = scenario(our_laxity(), 2.0).unwrap();
+        let g = sc.gens[1].iter().find(|g| g.tx == 6).unwrap();
+        assert_eq!(
+            g.kind,
             GenKind::Random {
                 lo: 5 * MS,
                 hi: 10 * MS

@@ -9,7 +9,9 @@ pub enum PolicyKind {
     /// (b) Ours: the engine as configured by the plan (log laxity, window-end fitting,
     /// hopeless messages dropped early).
     Ours,
-    /// (c) Non-preemptive EDF with global knowledge over the same free windows: the bound.
+    /// (c) Non-preemptive EDF with global knowledge over the same free windows: a
+    /// centralised reference, not an upper bound (greedy EDF with drops is not optimal;
+    /// `Ours` beats it at some loads).
     IdealEdf,
     /// (d) Plain CAN, fixed priorities, no TDMA.
     FixedPriority,

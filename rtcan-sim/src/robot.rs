@@ -118,6 +118,24 @@ pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
     })
 }
 
+/// Scales every SRT/NRT event rate of `sc` by `load` (inter-arrival times divided by it;
+/// 1.0 leaves them as they are). HRT topics are sampled by the calendar, not scaled.
+pub fn scale_load(sc: &mut Scenario, load: f64) {
+    let scale = |ns: Nanos| ((ns as f64 / load) as Nanos).max(1);
+    for g in sc.gens.iter_mut().flatten() {
+        g.kind = match g.kind {
+            GenKind::Random { lo, hi } => GenKind::Random {
+                lo: scale(lo),
+                hi: scale(hi),
+            },
+            GenKind::Periodic { period } => GenKind::Periodic {
+                period: scale(period),
+            },
+            GenKind::Hrt => GenKind::Hrt,
+        };
+    }
+}
+
 /// A user scenario file: the robot it runs and traffic per topic.
 ///
 /// ```toml

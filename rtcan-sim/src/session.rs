@@ -194,7 +194,8 @@ fn run_plan(
     req: &Request,
     notes: Vec<String>,
 ) -> Result<Report, String> {
-    let scenario = robot::scenario(plan, traffic)?;
+    let mut scenario = robot::scenario(plan, traffic)?;
+    robot::scale_load(&mut scenario, req.cfg.load);
     let (run, speed) = timed(req.cfg.seconds, || {
         run_engine(&scenario, &req.cfg, PolicyKind::Ours, Policy::OURS)
     })?;
@@ -283,6 +284,12 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
                 );
                 return run_plan(&plan, &[], req, vec![note]);
             }
+            if req.cfg.load != 1.0 {
+                return Err(
+                    "--load is not supported by the triskar2 scenario (its traffic comes from the node code)"
+                        .into(),
+                );
+            }
             let mut cfg = TriskarConfig {
                 sim: req.cfg.clone(),
                 gateway_dies_at_s: req.master_dies_at,
@@ -358,5 +365,50 @@ mod tests {
         r.master_dies_at = Some(1.0);
         let e = run(&r, &mut |_, _| {}).unwrap_err();
         assert!(e.contains("triskar2 scenario only"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod load_tests {
+    use super::*;
+
+    fn events(report: &Report) -> u64 {
+        match report {
+            Report::Robot { run, .. } => run.figures.srt.iter().map(|c| c.count).sum(),
+            _ => 0,
+        }
+    }
+
+    /// `--load` was silently ignored outside rtcan-paper: it scales a user scenario's
+    /// (and a robot's declared) rates, and triskar2, whose traffic is node code, refuses it.
+    #[test]
+    fn load_scales_user_scenarios_and_triskar2_refuses_it() {
+        let file = PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/scenarios/rtcan-paper.toml"
+        ));
+        let mut r = Request {
+            which: Which::File(file),
+            cfg: SimConfig {
+                seconds: 1.0,
+                record_wire: false,
+                ..SimConfig::default()
+            },
+            seconds_given: true,
+            sweep: false,
+            master_dies_at: None,
+        };
+        let one = events(&run(&r, &mut |_, _| {}).unwrap());
+        r.cfg.load = 0.5;
+        let half = events(&run(&r, &mut |_, _| {}).unwrap());
+        assert!(one > 1000, "{one}");
+        let ratio = half as f64 / one as f64;
+        assert!((0.4..0.6).contains(&ratio), "{half} / {one}");
+        r.which = Which::Triskar {
+            robot: concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml").into(),
+            explicit: true,
+        };
+        let e = run(&r, &mut |_, _| {}).unwrap_err();
+        assert!(e.contains("--load is not supported"), "{e}");
     }
 }
