@@ -9,7 +9,7 @@
 //! so one process runs one triskar2 simulation at a time: [`run`] holds a process-wide
 //! lock and returns every module's statics to power-on before it starts.
 use std::cell::RefCell;
-use std::collections::HashMap;
+use std::collections::VecDeque;
 use std::rc::Rc;
 use std::sync::Mutex;
 
@@ -20,9 +20,9 @@ use triskar2_nodes::app::{self as app};
 
 use crate::bus::{Bus, NodeSetup};
 use crate::controller::Filter;
-use crate::metrics::{compute, SrtStats, TopicInfo};
+use crate::metrics::{Meter, SrtStats, TopicInfo};
 use crate::plant::World;
-use crate::run::{window, Run, SimConfig};
+use crate::run::{window, Run, SimConfig, CHUNK_NS};
 use crate::slots::overlaps;
 
 pub mod module;
@@ -146,7 +146,7 @@ pub fn run(plan: &Plan, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
     reset_all();
     let result = simulate(&sc, cfg);
     reset_all();
-    Ok(result)
+    result
 }
 
 /// The module's generated acceptance filters as its firmware programs them: the sync
@@ -166,7 +166,7 @@ fn s_to_ns(s: f64) -> Nanos {
     (s.max(0.0) * 1e9) as Nanos
 }
 
-fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
+fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
     let world = World::new().with_wall((cfg.wall_x_m, -2.0), (cfg.wall_x_m, 2.0));
     let shared = Rc::new(RefCell::new(Shared {
         physics: Physics::new(world, cfg.sim.seed),
@@ -278,16 +278,71 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
         );
     }
     let end = cfg.sim.end_ns();
-    bus.run_until(end);
+    let win = window(&cfg.sim);
+    let mut meter = Meter::new(&sc.topics, win, bus.bit_ns());
+    let mut srt = SrtMatcher::new(&sc.topics, win);
+    let until = cfg.gateway_dies_at_s.map_or(Nanos::MAX, s_to_ns);
+    let mut log = match &cfg.sim.wire_log {
+        Some(p) => Some((
+            std::io::BufWriter::new(
+                std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?,
+            ),
+            p,
+        )),
+        None => None,
+    };
+    let mut kept = Vec::new();
+    let mut ov = 0;
+    let mut t = 0;
+    // In chunks: frames, fates and figures are measured as they come and dropped, so
+    // memory does not grow with the run (docs/SIM.md, Memory).
+    while t < end {
+        t = (t + CHUNK_NS).min(end);
+        bus.run_until(t);
+        for w in &bus.wire {
+            meter.frame(w);
+            srt.frame(w);
+        }
+        for n in 0..bus.len() {
+            if let Some(m) = bus.module_mut(n) {
+                for (tx, log) in m.srt_events() {
+                    srt.fates(n, *tx, log);
+                }
+            }
+        }
+        // The slot check ends with the master (the survivors then follow a backup).
+        if let (Some(m), Some(c0), Some(bc)) =
+            (bus.module(sc.master), bus.clock(sc.master), sc.bus())
+        {
+            let sclock = m.slot_clock();
+            let start = c0.local(0) + bc.slot_ns;
+            let wire: Vec<_> = bus.wire.iter().filter(|w| w.sof < until).copied().collect();
+            ov += overlaps(&wire, &bc, sc.masks(), |g| {
+                let l = c0.local(g);
+                (l >= start).then(|| sclock.to_bus(l))
+            });
+        }
+        if let Some((out, p)) = &mut log {
+            crate::candump::write(out, &bus.wire, "can0")
+                .map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+        if cfg.sim.record_wire {
+            kept.append(&mut bus.wire);
+        } else {
+            bus.wire.clear();
+        }
+    }
+    if let Some((mut out, p)) = log {
+        std::io::Write::flush(&mut out).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
     shared.borrow_mut().physics.advance_to(end);
 
-    let mut events: HashMap<(usize, u8), SrtLog> = HashMap::new();
     let mut modules = Vec::new();
     let mut overrides = 0;
     for n in 0..bus.len() {
-        let Some(m) = bus.module(n) else { continue };
+        let Some(m) = bus.module_mut(n) else { continue };
         for (tx, log) in m.srt_events() {
-            events.insert((n, *tx), log.clone());
+            srt.pending(n, *tx, log);
         }
         overrides += m.app().overrides().unwrap_or(0);
         modules.push(ModuleReport {
@@ -299,22 +354,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
             motor: m.app().motor(),
         });
     }
-    let win = window(&cfg.sim);
-    let mut figures = compute(&bus.wire, &sc.topics, &HashMap::new(), win, bus.bit_ns());
-    figures.srt = srt_by_fate(&bus.wire, &sc.topics, &events, win);
-    let ov = match (bus.module(sc.master), bus.clock(sc.master), sc.bus()) {
-        (Some(m), Some(c0), Some(bc)) => {
-            let sclock = m.slot_clock();
-            let start = c0.local(0) + bc.slot_ns;
-            let until = cfg.gateway_dies_at_s.map_or(Nanos::MAX, s_to_ns);
-            let wire: Vec<_> = bus.wire.iter().filter(|w| w.sof < until).copied().collect();
-            overlaps(&wire, &bc, sc.masks(), |g| {
-                let l = c0.local(g);
-                (l >= start).then(|| sclock.to_bus(l))
-            })
-        }
-        _ => 0,
-    };
+    let mut figures = meter.finish();
+    figures.srt = srt.finish();
     let mut sh = shared.borrow_mut();
     let path = std::mem::take(&mut sh.physics.path);
     let max_x_m = path
@@ -322,12 +363,12 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
         .map(|s| s.pose.x)
         .fold(f64::NEG_INFINITY, f64::max);
     let final_gap_m = path.last().map_or(f64::INFINITY, |s| s.gap_m);
-    TriskarRun {
+    Ok(TriskarRun {
         run: Run {
             policy: "ours",
             figures,
             overlaps: ov,
-            wire: std::mem::take(&mut bus.wire),
+            wire: kept,
             bus: bus.stats,
             counters: modules.iter().map(|m| m.counters).collect(),
             rx_ok: 0,
@@ -348,52 +389,124 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
         ),
         modules,
         config: cfg.clone(),
-    }
+    })
 }
 
-/// SRT latency per topic from the publications and their fates (`SrtLog`): the k-th
-/// publication the engine reported sent is the k-th complete transfer of the topic on the
-/// wire (a topic's messages leave the engine in order); a dropped or refused publication
-/// is a miss and shifts nothing; one still pending at the end is a miss if its deadline
-/// fell inside the window.
-fn srt_by_fate(
-    wire: &[crate::bus::WireFrame],
-    topics: &[TopicInfo],
-    logs: &HashMap<(usize, u8), SrtLog>,
+/// SRT latency per topic from the publications and their fates (`SrtLog`), streamed:
+/// the k-th publication the engine reported sent is the k-th complete transfer of the
+/// topic on the wire (a topic's messages leave the engine in order); a dropped or refused
+/// publication is a miss and shifts nothing; one still pending at the end is a miss if
+/// its deadline fell inside the window. Transfer ends wait in a queue until their fate
+/// comes (the engine reports a transfer sent after its last frame ends).
+struct SrtMatcher {
+    topics: Vec<(TopicInfo, VecDeque<Nanos>, u32)>,
+    stats: Vec<SrtStats>,
     win: crate::metrics::Window,
-) -> Vec<SrtStats> {
-    let mut out = Vec::new();
-    for t in topics.iter().filter(|t| t.class == Class::Srt) {
-        // Fragments go out highest first; fragment 0 completes the transfer.
-        let ends: Vec<Nanos> = wire
+}
+
+impl SrtMatcher {
+    fn new(topics: &[TopicInfo], win: crate::metrics::Window) -> Self {
+        let srt: Vec<TopicInfo> = topics
             .iter()
-            .filter(|w| w.ok && w.node == t.node && !w.frame.id().is_sync())
-            .filter(|w| w.frame.id().msg_id() == t.msg_id && w.frame.id().fragment() == 0)
-            .map(|w| w.end)
+            .filter(|t| t.class == Class::Srt)
+            .cloned()
             .collect();
-        let mut st = SrtStats {
-            name: t.label.clone(),
-            ..SrtStats::default()
+        SrtMatcher {
+            stats: srt
+                .iter()
+                .map(|t| SrtStats {
+                    name: t.label.clone(),
+                    ..SrtStats::default()
+                })
+                .collect(),
+            topics: srt.into_iter().map(|t| (t, VecDeque::new(), 0)).collect(),
+            win,
+        }
+    }
+
+    fn frame(&mut self, w: &crate::bus::WireFrame) {
+        let id = w.frame.id();
+        if !w.ok || id.is_sync() || id.fragment() != 0 {
+            return;
+        }
+        // Fragments go out highest first; fragment 0 completes the transfer.
+        if let Some((_, ends, _)) = self
+            .topics
+            .iter_mut()
+            .find(|(t, _, _)| t.node == w.node && t.msg_id == id.msg_id())
+        {
+            ends.push_back(w.end);
+        }
+    }
+
+    fn in_window(&self, t: &TopicInfo, at: Nanos) -> bool {
+        at >= self.win.from && at + t.deadline_ns < self.win.to
+    }
+
+    /// Measures the fates `log` reported so far for (`node`, `tx`) and forgets them.
+    fn fates(&mut self, node: usize, tx: u8, log: &mut SrtLog) {
+        let Some(k) = self
+            .topics
+            .iter()
+            .position(|(t, _, _)| t.node == node && t.tx == tx)
+        else {
+            log.done.clear();
+            return;
         };
-        let in_window = |at: Nanos| at >= win.from && at + t.deadline_ns < win.to;
-        if let Some(log) = logs.get(&(t.node, t.tx)) {
-            for &(at, fate) in &log.done {
-                if !in_window(at) {
-                    continue;
+        for (at, fate) in log.done.drain(..) {
+            let (Some((t, ends, base)), Some(st)) = (self.topics.get_mut(k), self.stats.get_mut(k))
+            else {
+                return;
+            };
+            let counted = at >= self.win.from && at + t.deadline_ns < self.win.to;
+            let end = match fate {
+                Fate::Sent(n) => {
+                    while *base < n && ends.pop_front().is_some() {
+                        *base += 1;
+                    }
+                    let e = ends.pop_front();
+                    if e.is_some() {
+                        *base += 1;
+                    }
+                    e
                 }
-                match fate {
-                    Fate::Sent(k) => match ends.get(k as usize) {
-                        Some(&e) => st.delivered(e.saturating_sub(at), t.deadline_ns),
-                        None => st.lost(),
-                    },
-                    Fate::Dropped | Fate::Refused => st.lost(),
+                Fate::Dropped | Fate::Refused => None,
+            };
+            if counted {
+                match end {
+                    Some(e) => st.delivered(e.saturating_sub(at), t.deadline_ns),
+                    None => st.lost(),
                 }
             }
-            for _ in log.pending.iter().filter(|&&at| in_window(at)) {
+        }
+    }
+
+    /// Publications still without a fate at the end of the run.
+    fn pending(&mut self, node: usize, tx: u8, log: &mut SrtLog) {
+        self.fates(node, tx, log);
+        let Some(k) = self
+            .topics
+            .iter()
+            .position(|(t, _, _)| t.node == node && t.tx == tx)
+        else {
+            return;
+        };
+        let n = match self.topics.get(k) {
+            Some((t, _, _)) => log
+                .pending
+                .iter()
+                .filter(|&&at| self.in_window(t, at))
+                .count(),
+            None => 0,
+        };
+        if let Some(st) = self.stats.get_mut(k) {
+            for _ in 0..n {
                 st.lost();
             }
         }
-        out.push(st);
     }
-    out
+
+    fn finish(self) -> Vec<SrtStats> {
+        self.stats
+    }
 }

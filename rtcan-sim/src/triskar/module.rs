@@ -177,8 +177,8 @@ pub trait Inspect {
     fn safe_trips(&self) -> u32;
     fn safe_now(&self) -> bool;
     fn app(&self) -> &App;
-    /// SRT publications so far, per transmit index.
-    fn srt_events(&self) -> &[(u8, SrtLog)];
+    /// SRT publications so far, per transmit index (drained by the measurement).
+    fn srt_events(&mut self) -> &mut [(u8, SrtLog)];
 }
 
 /// An SRT topic whose publications are followed: tx index, how to read the topic's
@@ -204,7 +204,7 @@ pub enum Fate {
 pub struct SrtLog {
     /// Publications awaiting their fate (global times), oldest first.
     pub pending: std::collections::VecDeque<Nanos>,
-    /// Publications and their fates, in publication order of the fates.
+    /// Publications and their fates not yet measured, in the order of the fates.
     pub done: Vec<(Nanos, Fate)>,
     sent: u32,
 }
@@ -405,8 +405,8 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     fn app(&self) -> &App {
         &self.app
     }
-    fn srt_events(&self) -> &[(u8, SrtLog)] {
-        &self.srt_log
+    fn srt_events(&mut self) -> &mut [(u8, SrtLog)] {
+        &mut self.srt_log
     }
 }
 
