@@ -16,6 +16,7 @@ pub mod candump;
 pub mod clock;
 pub mod compare;
 pub mod controller;
+pub mod decimate;
 pub mod decode;
 pub mod fixed;
 pub mod ideal;

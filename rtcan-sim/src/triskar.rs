@@ -82,7 +82,8 @@ pub struct ModuleReport {
 pub struct TriskarRun {
     /// Bus figures, as for every scenario (SRT from the publication log, see `srt`).
     pub run: Run,
-    /// Path samples (every 50 ms).
+    /// Path samples (every 50 ms; in long runs every 100, 200, … ms: at most
+    /// `decimate::KEEP` and the last).
     pub path: Vec<PathSample>,
     /// Smallest gap between the body and the wall, m.
     pub min_gap_m: f64,
@@ -92,8 +93,11 @@ pub struct TriskarRun {
     pub max_x_m: f64,
     /// Velocity publications the obstacle node limited.
     pub overrides: u32,
-    /// Odometry as received by the gateway: (global ns, x, y, theta).
+    /// Odometry as received by the gateway: (global ns, x, y, theta), decimated as
+    /// `path`, the last one always kept.
     pub odometry: Vec<(Nanos, f32, f32, f32)>,
+    /// Odometry messages the gateway received.
+    pub odometry_rx: u64,
     /// Messages the gateway received: proximity, battery, log; the last log line.
     pub gateway_rx: (u32, u32, u32, String),
     pub modules: Vec<ModuleReport>,
@@ -175,7 +179,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             from_ns: s_to_ns(cfg.command_from_s),
             until_ns: s_to_ns(cfg.command_until_s),
         },
-        odometry: Vec::new(),
+        odometry: crate::decimate::Decimated::default(),
         proximity_rx: 0,
         battery_rx: 0,
         log_rx: 0,
@@ -357,12 +361,11 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
     let mut figures = meter.finish();
     figures.srt = srt.finish();
     let mut sh = shared.borrow_mut();
-    let path = std::mem::take(&mut sh.physics.path);
-    let max_x_m = path
-        .iter()
-        .map(|s| s.pose.x)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let path = std::mem::take(&mut sh.physics.path).into_vec();
+    let max_x_m = sh.physics.max_x_m;
     let final_gap_m = path.last().map_or(f64::INFINITY, |s| s.gap_m);
+    let odometry = std::mem::take(&mut sh.odometry);
+    let odometry_rx = odometry.seen();
     Ok(TriskarRun {
         run: Run {
             policy: "ours",
@@ -380,7 +383,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         final_gap_m,
         max_x_m,
         overrides,
-        odometry: std::mem::take(&mut sh.odometry),
+        odometry: odometry.into_vec(),
+        odometry_rx,
         gateway_rx: (
             sh.proximity_rx,
             sh.battery_rx,

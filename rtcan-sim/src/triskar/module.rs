@@ -27,7 +27,7 @@ pub struct Shared {
     pub physics: Physics,
     pub script: Script,
     /// Odometry messages received by the gateway: (global ns, x, y, theta).
-    pub odometry: Vec<(Nanos, f32, f32, f32)>,
+    pub odometry: crate::decimate::Decimated<(Nanos, f32, f32, f32)>,
     /// Proximity, battery and log messages received by the gateway.
     pub proximity_rx: u32,
     pub battery_rx: u32,

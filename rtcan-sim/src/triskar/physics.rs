@@ -47,8 +47,10 @@ pub struct Physics {
     pub battery: BatteryPack,
     rng: Rng,
     t_ns: Nanos,
-    /// Samples every `SAMPLE_NS`.
-    pub path: Vec<PathSample>,
+    /// Samples every `SAMPLE_NS`, decimated past `decimate::KEEP` (bounded memory).
+    pub path: crate::decimate::Decimated<PathSample>,
+    /// Largest x reached, m.
+    pub max_x_m: f64,
     /// Smallest body-to-obstacle gap seen, m.
     pub min_gap_m: f64,
     /// Gateway command currently sent, for the path table.
@@ -71,7 +73,8 @@ impl Physics {
             battery: BatteryPack::new(BatteryParams::TRISKAR2, 0.9),
             rng: Rng::new(seed, 0x7215),
             t_ns: 0,
-            path: Vec::new(),
+            path: crate::decimate::Decimated::default(),
+            max_x_m: 0.0,
             min_gap_m: gap,
             cmd: None,
             velocity: None,
@@ -102,6 +105,7 @@ impl Physics {
             self.t_ns += TICK_NS;
             let gap = self.gap();
             self.min_gap_m = self.min_gap_m.min(gap);
+            self.max_x_m = self.max_x_m.max(self.base.pose().x);
         }
     }
 

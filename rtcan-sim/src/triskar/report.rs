@@ -31,7 +31,16 @@ pub fn triskar_text(r: &TriskarRun) -> String {
         o,
         "path (every 0.5 s)   x [m]    y [m]  theta  vx [m/s]  gap [m]  teleop vx  velocity vx"
     );
-    for p in r.path.iter().step_by(10) {
+    // Rows at least 0.5 s apart (the path is sampled every 50 ms, more sparsely in
+    // long runs).
+    let mut next = 0;
+    for p in r.path.iter().filter(|p| {
+        let due = p.t_ns >= next;
+        if due {
+            next = p.t_ns - p.t_ns % 500_000_000 + 500_000_000;
+        }
+        due
+    }) {
         let _ = writeln!(
             o,
             "  t = {:5.2} s  {:>8.3} {:>8.3} {:>6.3} {:>9.3} {:>8.3} {:>10.2} {:>12.2}",
@@ -71,7 +80,7 @@ pub fn triskar_text(r: &TriskarRun) -> String {
     let _ = writeln!(
         o,
         "gateway received: {} odometry, {prox} proximity, {bat} battery, {log} log (last: \"{last}\")",
-        r.odometry.len()
+        r.odometry_rx
     );
     let _ = writeln!(o);
     let _ = writeln!(
@@ -163,7 +172,7 @@ pub fn triskar_json(r: &TriskarRun, speed_x: f64) -> String {
         num(r.final_gap_m),
         r.stopped_short(),
         r.overrides,
-        r.odometry.len(),
+        r.odometry_rx,
         path.join(","),
         modules.join(","),
         num(speed_x)
