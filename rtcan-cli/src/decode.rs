@@ -1,7 +1,7 @@
 //! `rtcan decode <log|-> --robot robot.toml`: candump log → topic-level messages, line by
 //! line (a record is printed as soon as its last frame is read; memory does not grow
 //! with the log).
-use std::io::{BufRead, Write as _};
+use std::io::{BufRead, Read as _, Write as _};
 
 use rtcan_sim::candump::{classify, Line};
 use rtcan_sim::decode::{plan_catalog, render, scenario_catalog, Catalog, Decoder};
@@ -21,6 +21,10 @@ remote, error and CAN FD frames are skipped and counted; malformed lines are rep
 
 /// Malformed lines reported one by one; the rest only counted.
 const REPORTED_BAD_LINES: u64 = 10;
+
+/// Longest line read as one (a candump line is under 100 bytes; longer input is cut
+/// into malformed pieces of this size).
+const MAX_LINE: u64 = 4096;
 
 struct Args {
     log: String,
@@ -129,7 +133,9 @@ fn decode_stream(
     let mut line = Vec::new();
     loop {
         line.clear();
-        match input.read_until(b'\n', &mut line) {
+        // A line is read up to MAX_LINE bytes: input without newlines (`/dev/zero`) is
+        // malformed lines of bounded size, not an ever-growing buffer.
+        match (&mut input).take(MAX_LINE).read_until(b'\n', &mut line) {
             Ok(0) => break,
             Ok(_) => {}
             Err(e) => {
@@ -138,9 +144,14 @@ fn decode_stream(
             }
         }
         lineno += 1;
-        let parsed = std::str::from_utf8(&line)
-            .map_err(|_| "not UTF-8")
-            .and_then(classify);
+        let too_long = line.len() as u64 == MAX_LINE && line.last() != Some(&b'\n');
+        let parsed = if too_long {
+            Err("line too long")
+        } else {
+            std::str::from_utf8(&line)
+                .map_err(|_| "not UTF-8")
+                .and_then(classify)
+        };
         let entry = match parsed {
             Ok(Line::Frame(e)) => e,
             Ok(Line::Blank) => continue,

@@ -277,3 +277,19 @@ fn sim_out_streams_the_same_log_the_run_records() {
         assert!(dir.join(f).exists(), "{f}");
     }
 }
+
+/// A line without end (`/dev/zero`-like input) is read in bounded pieces, each counted
+/// malformed; decoding goes on after it.
+#[test]
+fn decode_reads_overlong_lines_in_bounded_pieces() {
+    let mut input = "X".repeat(40_960);
+    input.push('\n');
+    input.push_str(triskar_log().lines().next().unwrap());
+    input.push('\n');
+    let (code, out, err) = rtcan_in(&["decode", "-", "--robot", "robot.toml"], Some(&input));
+    assert_eq!(code, 1);
+    assert!(err.contains("<stdin>:1: line too long"), "{err}");
+    assert!(out.contains(" 1 frames: "), "{out}");
+    // 40 960 bytes = 10 pieces of 4 096; the newline after them ends an empty line.
+    assert!(out.contains(", 10 malformed lines"), "{out}");
+}
