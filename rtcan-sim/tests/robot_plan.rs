@@ -159,3 +159,42 @@ fn a_robot_beyond_the_medium_tier_simulates() {
     assert!(run.rx_ok >= 10, "{}", run.rx_ok);
     assert_eq!(run.overlaps, 0);
 }
+
+/// "If `check` admits a robot, the simulator runs it": every robot file of the
+/// repository the model admits (robots/, robots/broken/, tests/) builds a scenario and
+/// runs 0.2 s with no bad delivery and no slot overlap.
+#[test]
+fn every_admitted_robot_file_of_the_repository_simulates() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files = vec![root.join("robot.toml")];
+    for dir in ["robots", "robots/broken", "tests/robots", "tests/ui/robots"] {
+        let Ok(rd) = std::fs::read_dir(root.join(dir)) else {
+            continue;
+        };
+        for e in rd.flatten() {
+            if e.path().extension().is_some_and(|x| x == "toml") {
+                files.push(e.path());
+            }
+        }
+    }
+    files.sort();
+    let mut admitted = 0;
+    for f in &files {
+        let Ok(p) = rtcan_model::Robot::load(f) else {
+            continue;
+        };
+        admitted += 1;
+        let sc =
+            rtcan_sim::robot::scenario(&p, &[]).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        let cfg = SimConfig {
+            seconds: 0.2,
+            record_wire: false,
+            ..SimConfig::default()
+        };
+        let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS)
+            .unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        assert_eq!(run.rx_bad, 0, "{}", f.display());
+        assert_eq!(run.overlaps, 0, "{}", f.display());
+    }
+    assert!(admitted >= 5, "{admitted} of {}", files.len());
+}
