@@ -19,6 +19,7 @@ pub mod controller;
 pub mod decimate;
 pub mod decode;
 pub mod fixed;
+pub mod histogram;
 pub mod ideal;
 pub mod metrics;
 pub mod paper;
