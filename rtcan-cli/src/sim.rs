@@ -100,6 +100,9 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     if master_dies_at.is_some() && !matches!(which, Which::Triskar { .. }) {
         return Err("--master-dies-at is supported by the triskar2 scenario only".into());
     }
+    if sweep && which != Which::Paper {
+        return Err("--sweep is supported by the rtcan-paper scenario only".into());
+    }
     Ok(Some(Args {
         req: Request {
             which,
@@ -415,6 +418,8 @@ mod tests {
         );
         let e = parse(&args("--scenario rtcan-paper --master-dies-at 1")).unwrap_err();
         assert!(e.contains("triskar2 scenario only"), "{e}");
+        let e = parse(&args("robot.toml --sweep")).unwrap_err();
+        assert!(e.contains("rtcan-paper scenario only"), "{e}");
         let ok = parse(&args("--scenario rtcan-paper --seconds 2"))
             .unwrap()
             .unwrap();
