@@ -6,12 +6,12 @@
 //! from time-triggered mode (TTCM, see `rtcan_board_common::sof`).
 use bxcan::filter::Mask32;
 use bxcan::{ExtendedId, Fifo};
+use rtcan_board_common::sof::valid_bits_min;
 use rtcan_board_common::{FilterSet, SofClock};
 use rtcan_core::driver::{Controller, Mailbox, TxResult};
 use rtcan_core::frame::Frame;
 use rtcan_core::id::CanId;
 use rtcan_core::time::Nanos;
-use rtcan_core::timing::{exact_bits, INTERMISSION_BITS};
 use stm32f1xx_hal::can::Can;
 use stm32f1xx_hal::pac;
 
@@ -179,9 +179,9 @@ impl<PULL> BxCan<PULL> {
             let data = [lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]];
             match id.and_then(|id| Frame::from_parts(id, dlc, data)) {
                 Some(frame) => {
-                    // The RX interrupt is raised when the frame becomes valid, at the
-                    // last-but-one EOF bit: frame length minus intermission minus one bit.
-                    let bits = exact_bits(&frame).saturating_sub(INTERMISSION_BITS + 1);
+                    // The RX interrupt is raised when the frame becomes valid, at least
+                    // the unstuffed frame length after SOF (bounds, not exact_bits).
+                    let bits = valid_bits_min(frame.dlc());
                     let sof = self.sof.sof((rdtr >> 16) as u16, bits, now);
                     return Some((frame, sof));
                 }
