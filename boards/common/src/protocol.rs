@@ -48,12 +48,15 @@ impl Controller for DynController<'_> {
 pub trait SlotTimerHw {
     /// Local time, ns.
     fn now(&self) -> Nanos;
-    /// Arms the commit compare at local `at`; false if `at` has already passed (the
+    /// Timer ticks of local time `at`, rounded up. Called outside critical sections (it
+    /// may divide, a library call on the Cortex-M3).
+    fn ticks_of(at: Nanos) -> u64;
+    /// Arms the commit compare at tick `at_ticks`; false if it has already passed (the
     /// caller commits at once).
-    fn arm_commit(&mut self, at: Nanos) -> bool;
-    /// Arms the prepare alarm at local `at`: the slot-timer interrupt then only pends the
-    /// protocol task. `Nanos::MAX`: none.
-    fn arm_prepare(&mut self, at: Nanos);
+    fn arm_commit(&mut self, at_ticks: u64) -> bool;
+    /// Arms the prepare alarm at tick `at_ticks`: the slot-timer interrupt then only
+    /// pends the protocol task. `u64::MAX`: none.
+    fn arm_prepare(&mut self, at_ticks: u64);
 }
 
 /// The resource of the slot-timer interrupt.
@@ -400,7 +403,7 @@ impl Protocol {
             }
             let at = engine.next_wakeup();
             if at == Nanos::MAX {
-                slot.lock(|c| c.timer.arm_prepare(Nanos::MAX));
+                slot.lock(|c| c.timer.arm_prepare(u64::MAX));
                 return;
             }
             if at <= now {
@@ -410,16 +413,18 @@ impl Protocol {
                 continue;
             }
             if at - now > self.lead_ns {
-                slot.lock(|c| c.timer.arm_prepare(at - self.lead_ns));
+                let ticks = T::ticks_of(at - self.lead_ns);
+                slot.lock(|c| c.timer.arm_prepare(ticks));
                 return;
             }
+            let ticks = T::ticks_of(at);
             slot.lock(|c| c.plan.arm(at));
             engine.poll(at, &mut self.gate(slot), host);
             let on_time = slot.lock(|c| {
                 if !c.plan.is_armed() {
                     return true;
                 }
-                if c.timer.arm_commit(at) {
+                if c.timer.arm_commit(ticks) {
                     return true;
                 }
                 // Passed while preparing: commit now.

@@ -42,11 +42,13 @@ impl SlotPlan {
     /// Starts a plan for local time `at` (what an earlier plan held is dropped: call only
     /// when none is armed).
     pub fn arm(&mut self, at: Nanos) {
-        *self = SlotPlan {
-            armed: true,
-            at,
-            ..SlotPlan::new()
-        };
+        // Field by field: this runs in a critical section against the slot timer.
+        self.armed = true;
+        self.at = at;
+        for load in self.loads.iter_mut() {
+            *load = None;
+        }
+        self.aborts = 0;
     }
 
     /// True from `arm` to `commit` (or `disarm`).

@@ -35,14 +35,24 @@ pub const fn valid_bits_min(dlc: u8) -> u32 {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SofClock {
     bit_ns: i64,
-    drift_ppm: i64,
+    /// 2^32 / bit_ns, rounded up: ns → bits by multiply and shift (a 64-bit division is a
+    /// library call of a few hundred instructions on the Cortex-M3).
+    inv_bit_q32: i64,
+    /// Drift bound, ppm × 2^20 / 10^6, rounded up.
+    drift_q20: i64,
     /// Local ns at unwrapped counter value 0 (`None` until the first frame). The counter's
     /// absolute value is never needed: a whole number of wraps picked at the first frame
     /// is absorbed by the offset.
     offset: Option<i64>,
     /// Local time of the last offset update.
     updated: i64,
+    /// Estimated counter value (unwrapped) at `updated`.
+    updated_bits: i64,
 }
+
+/// Gaps between frames up to this many ns are converted to bits by multiply and shift;
+/// longer silences (over 4 s) take the division.
+const FAST_GAP_NS: i64 = 1 << 32;
 
 impl SofClock {
     /// Bit time `bit_ns` (a whole number of ns at every standard rate) and the bound of
@@ -51,9 +61,11 @@ impl SofClock {
         let bit_ns = if bit_ns == 0 { 1 } else { bit_ns as i64 };
         SofClock {
             bit_ns,
-            drift_ppm: drift_ppm as i64,
+            inv_bit_q32: ((1i64 << 32) + bit_ns - 1) / bit_ns,
+            drift_q20: (((drift_ppm as i64) << 20) + 999_999) / 1_000_000,
             offset: None,
             updated: 0,
+            updated_bits: 0,
         }
     }
 
@@ -61,7 +73,7 @@ impl SofClock {
     /// handled at local `now`, at least `min_bits_sof_to_irq` bits after its SOF (use
     /// `valid_bits_min(dlc)`). Also refines the offset estimate.
     pub fn sof(&mut self, time16: u16, min_bits_sof_to_irq: u32, now: u64) -> u64 {
-        let now = now.min(i64::MAX as u64) as i64;
+        let now = now.min(i64::MAX as u64 >> 1) as i64;
         let bits = min_bits_sof_to_irq as i64;
         let bit = self.bit_ns;
         let (sof_bits, offset) = match self.offset {
@@ -72,9 +84,12 @@ impl SofClock {
             Some(offset) => {
                 // Drift since the last update may make the stored offset too high and so
                 // the estimated counter too low: estimate against an offset lowered by it.
-                let drift_ns =
-                    (now - self.updated).max(0).saturating_mul(self.drift_ppm) / 1_000_000;
-                let est_sof = (now - offset + drift_ns) / bit - bits;
+                let elapsed = (now - self.updated).clamp(0, 1 << 40);
+                let drift_ns = (elapsed * self.drift_q20 + (1 << 20) - 1) >> 20;
+                let gap = elapsed + drift_ns;
+                // Only needs to be within ±32 767 bits: approximations of a bit are fine.
+                let gap_bits = self.to_bits(gap);
+                let est_sof = self.updated_bits + gap_bits - bits;
                 // Nearest value congruent to the stamp (mod 2^16).
                 let delta = time16.wrapping_sub(est_sof as u16) as i16;
                 let sof_bits = est_sof + delta as i64;
@@ -84,7 +99,20 @@ impl SofClock {
         };
         self.offset = Some(offset);
         self.updated = now;
+        // Counter at `now` under the new offset: this frame's bound, less by how much its
+        // latency and stuff bits exceed the best frame's.
+        let candidate = now - (sof_bits + bits) * bit;
+        self.updated_bits = sof_bits + bits + self.to_bits(candidate - offset);
         (offset + sof_bits * bit).max(0) as u64
+    }
+
+    /// `ns` (≥ 0) in bits, rounded down (± 1 bit).
+    fn to_bits(&self, ns: i64) -> i64 {
+        if ns < FAST_GAP_NS {
+            (ns * self.inv_bit_q32) >> 32
+        } else {
+            ns / self.bit_ns
+        }
     }
 
     /// Current offset estimate (local ns at the counter value taken as 0).
@@ -258,6 +286,21 @@ mod tests {
             let s = 100 + k * 1_000;
             let got = c.sof(s as u16, n as u32, origin + (s + n) * BIT + 1_000);
             assert_eq!(got, origin + s * BIT + 1_000, "frame {k}");
+        }
+    }
+
+    #[test]
+    fn long_silences_take_the_exact_path() {
+        // 10 s and 100 s without a frame (beyond the multiply-shift range), no latency.
+        let mut c = SofClock::new(BIT as u32, 200);
+        let origin = 7_000_000u64;
+        for s in [5u64, 10_000_005, 110_000_005, 110_001_005] {
+            let now = origin + (s + 100) * BIT;
+            assert_eq!(
+                c.sof(s as u16, 100, now),
+                origin + s * BIT,
+                "frame at {s} bits"
+            );
         }
     }
 

@@ -175,8 +175,10 @@ impl SlotTimerHw for SimTimer {
     fn now(&self) -> Nanos {
         self.clock.ticks(self.cnt()) * TICK_NS
     }
-    fn arm_commit(&mut self, at: Nanos) -> bool {
-        let target = at.div_ceil(TICK_NS);
+    fn ticks_of(at: Nanos) -> u64 {
+        at.div_ceil(TICK_NS)
+    }
+    fn arm_commit(&mut self, target: u64) -> bool {
         let value = match WideClock::arm(target, self.clock.ticks(self.cnt())) {
             Arm::Due => return false,
             Arm::Compare(v) => v,
@@ -188,17 +190,17 @@ impl SlotTimerHw for SimTimer {
             write_volatile(&mut self.ccr1, value as u32);
             write_volatile(&mut self.dier, self.dier | DIER_CC1IE);
         }
-        // The compare matches at the first tick not before `at`.
-        self.commit_at = Some(target * TICK_NS);
+        // The compare matches at that tick (the bus model's event time).
+        self.commit_at = Some(target.saturating_mul(TICK_NS));
         true
     }
-    fn arm_prepare(&mut self, at: Nanos) {
+    fn arm_prepare(&mut self, target: u64) {
         // SAFETY: plain RAM owned by `self`.
         unsafe {
-            write_volatile(&mut self.ccr3, at.div_ceil(TICK_NS) as u16 as u32);
+            write_volatile(&mut self.ccr3, target as u16 as u32);
             write_volatile(&mut self.dier, self.dier | DIER_CC3IE);
         }
-        self.prepare_at = at.div_ceil(TICK_NS).saturating_mul(TICK_NS);
+        self.prepare_at = target.saturating_mul(TICK_NS);
     }
 }
 
