@@ -30,6 +30,7 @@ use rtcan_core::driver::{Controller, Host, Mailbox, TxResult};
 use rtcan_core::engine::Engine;
 use rtcan_core::frame::Frame;
 use rtcan_core::time::Nanos;
+use rtcan_core::timing::{worst_case_bits, INTERMISSION_BITS};
 
 /// A `Controller` behind a trait object (for `Protocol::run`'s pump callback, e.g.
 /// `ModuleHost::pump`, which takes `&mut impl Controller`).
@@ -102,6 +103,15 @@ pub enum RxEvent {
     Overrun,
 }
 
+/// What the CAN TX and status-change interrupts queue for the protocol task.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TxEvent {
+    /// A mailbox completed (automatic retransmission on: without TXOK it was aborted).
+    Done(Mailbox, TxResult),
+    /// The controller entered bus-off (the interrupt already aborted every mailbox).
+    BusOff,
+}
+
 /// Counters of the protocol task (the engine counts protocol-level events).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ProtocolStats {
@@ -113,6 +123,18 @@ pub struct ProtocolStats {
     pub muted_loads: u32,
     /// Bus-off entries handled.
     pub bus_off: u32,
+}
+
+/// Where a received frame's SOF time comes from, chosen per board.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stamps {
+    /// bxCAN time-triggered mode: the 16-bit bit-time stamp of the SOF (`SofClock`);
+    /// error: the best RX latency plus stuff bits seen.
+    Ttcm,
+    /// For controllers without (working) TTCM: the RX interrupt's time minus the frame's
+    /// worst-case length to its valid point. Error: between −(maximum stuff bits) and
+    /// +(this interrupt's latency), per frame — larger, and the timing check must count it.
+    RxTime,
 }
 
 /// Transmit state after a bus-off.
@@ -129,6 +151,8 @@ enum Mute {
 /// The protocol task's state besides the engine and the host.
 pub struct Protocol {
     sof: SofClock,
+    stamps: Stamps,
+    bit_ns: Nanos,
     lead_ns: Nanos,
     /// Mailboxes to report `Aborted` to the engine (staged loads cancelled or held back).
     synthetic: u8,
@@ -206,6 +230,8 @@ impl Protocol {
     pub const fn new(bit_ns: u32, drift_ppm: u32, lead_ns: Nanos) -> Self {
         Protocol {
             sof: SofClock::new(bit_ns, drift_ppm),
+            stamps: Stamps::Ttcm,
+            bit_ns: bit_ns as Nanos,
             lead_ns,
             synthetic: 0,
             parked: 0,
@@ -217,6 +243,12 @@ impl Protocol {
                 bus_off: 0,
             },
         }
+    }
+
+    /// The same with SOF times from `stamps` (default: TTCM).
+    pub const fn with_stamps(mut self, stamps: Stamps) -> Self {
+        self.stamps = stamps;
+        self
     }
 
     /// Counters.
@@ -270,9 +302,16 @@ impl Protocol {
             self.stats.rx_foreign = self.stats.rx_foreign.saturating_add(1);
             return;
         };
-        let sof = self
-            .sof
-            .sof((regs.tdtr >> 16) as u16, valid_bits_min(frame.dlc()), now);
+        let sof = match self.stamps {
+            Stamps::Ttcm => {
+                self.sof
+                    .sof((regs.tdtr >> 16) as u16, valid_bits_min(frame.dlc()), now)
+            }
+            Stamps::RxTime => {
+                let bits = worst_case_bits(frame.dlc()) - INTERMISSION_BITS - 1;
+                now.saturating_sub(bits as Nanos * self.bit_ns)
+            }
+        };
         let mut gate = self.gate(slot);
         engine.on_rx(&frame, sof, &mut gate, host);
         if frame.id().is_sync() && self.mute == Mute::UntilSync && engine.is_synced() {
@@ -299,6 +338,25 @@ impl Protocol {
         let now = slot.lock(|c| c.timer.now());
         let mut gate = self.gate(slot);
         engine.on_tx_done(mailbox, result, now, &mut gate, host);
+    }
+
+    /// One queued TX event.
+    pub fn on_tx_event<L, T, P, H, const RX: usize, const A: usize, const Q: usize>(
+        &mut self,
+        event: &TxEvent,
+        engine: &mut Engine<'_, RX, A, Q>,
+        host: &mut H,
+        slot: &mut L,
+    ) where
+        L: Lock<SlotCore<T, P>>,
+        T: SlotTimerHw,
+        P: TxPort,
+        H: Host,
+    {
+        match *event {
+            TxEvent::Done(m, r) => self.on_tx_done(m, r, engine, host, slot),
+            TxEvent::BusOff => self.on_bus_off(engine, slot),
+        }
     }
 
     /// Bus-off seen (status-change interrupt, after it aborted every mailbox): the plan
