@@ -18,7 +18,6 @@ mod app {
     use fw::driver::{pend_protocol, Driver, Rtic, SlotCore, RX_QUEUE, TX_QUEUE};
     use heapless::spsc::{Consumer, Producer, Queue};
     use rtcan::robot_toml::BUS;
-    use rtcan_board_stm32f103::common::protocol::Direct;
     use rtcan_board_stm32f103::common::{RxEvent, SlotPlan, TxEvent};
     use rtcan_board_stm32f103::hal::watchdog::IndependentWatchdog;
     use rtcan_board_stm32f103::{filter_set, glue, CanRx, CanSce, CanTxIrq};
@@ -60,23 +59,20 @@ mod app {
         let hw = Hw::from_board(board);
         let (rx_events, rx_queue) = cx.local.rxq.split();
         let (tx_events, tx_queue) = cx.local.txq.split();
-        let mut slot = SlotCore {
+        let slot = SlotCore {
             timer: bus.timer,
             plan: SlotPlan::new(),
             tx: bus.can.tx,
         };
-        let mut drv = Drv::new(
+        let drv = Drv::new(
             module::engine(slot.timer.now()),
             module::host(),
             BUS.bitrate,
             BUS.slot_ns,
             STAMPS,
         );
-        // First run before interrupts are enabled: arms the first wake-up.
-        let (mut none_rx, mut none_tx) = (Queue::<RxEvent, 2>::new(), Queue::<TxEvent, 2>::new());
-        let (_, mut c_rx) = none_rx.split();
-        let (_, mut c_tx) = none_tx.split();
-        drv.run(&mut c_rx, &mut c_tx, &mut Direct(&mut slot));
+        // The protocol task's first run (right after init) arms the first wake-up.
+        pend_protocol();
         if module_app::spawn().is_err() {
             defmt::error!("app task was already running");
         }
