@@ -88,7 +88,7 @@ impl SofClock {
                 let drift_ns = (elapsed * self.drift_q20 + (1 << 20) - 1) >> 20;
                 let gap = elapsed + drift_ns;
                 // Only needs to be within ±32 767 bits: approximations of a bit are fine.
-                let gap_bits = self.to_bits(gap);
+                let gap_bits = self.bits_in(gap);
                 let est_sof = self.updated_bits + gap_bits - bits;
                 // Nearest value congruent to the stamp (mod 2^16).
                 let delta = time16.wrapping_sub(est_sof as u16) as i16;
@@ -102,12 +102,12 @@ impl SofClock {
         // Counter at `now` under the new offset: this frame's bound, less by how much its
         // latency and stuff bits exceed the best frame's.
         let candidate = now - (sof_bits + bits) * bit;
-        self.updated_bits = sof_bits + bits + self.to_bits(candidate - offset);
+        self.updated_bits = sof_bits + bits + self.bits_in(candidate - offset);
         (offset + sof_bits * bit).max(0) as u64
     }
 
     /// `ns` (≥ 0) in bits, rounded down (± 1 bit).
-    fn to_bits(&self, ns: i64) -> i64 {
+    fn bits_in(&self, ns: i64) -> i64 {
         if ns < FAST_GAP_NS {
             (ns * self.inv_bit_q32) >> 32
         } else {

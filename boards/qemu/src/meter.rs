@@ -230,6 +230,30 @@ impl PathMeter {
     }
 }
 
+/// A `SysTickMeter` that keeps statistics per `Kind`.
+pub struct KindMeter {
+    /// The meter.
+    pub meter: SysTickMeter,
+    /// `Engine::poll` at slot boundaries.
+    pub poll: Stat,
+    /// `Engine::on_rx`.
+    pub rx: Stat,
+    /// `Engine::on_tx_done`.
+    pub tx_done: Stat,
+}
+
+impl Meter for KindMeter {
+    fn measure(&mut self, kind: Kind, f: &mut dyn FnMut()) {
+        let n = self.meter.instructions(f);
+        match kind {
+            Kind::Poll => self.poll.add(n),
+            Kind::Rx => self.rx.add(n),
+            Kind::TxDone => self.tx_done.add(n),
+            _ => {}
+        }
+    }
+}
+
 /// Prints one benchmark line in the format `run-qemu.sh` tabulates.
 pub fn report(name: &str, s: &Stat) {
     cortex_m_semihosting::hprintln!(

@@ -333,9 +333,8 @@ impl<'t, 'm, H: Host, const RX: usize, const A: usize, const Q: usize>
             meter,
         };
         while let Some(ev) = self.rxq.dequeue() {
-            let sync_on_slave = matches!(ev, RxEvent::Frame(regs, _)
-                if regs.frame().is_some_and(|f| f.id().is_sync()))
-                && !self.engine.is_master();
+            let sync_on_slave =
+                ev.regs.frame().is_some_and(|f| f.id().is_sync()) && !self.engine.is_master();
             let kind = if sync_on_slave {
                 Kind::TaskSyncSlave
             } else {
@@ -449,7 +448,7 @@ fn can_rx_isr(fifo: &mut ShadowFifo, timer: &SimTimer, q: &mut Queue<RxEvent, 8>
         // SAFETY: plain RAM; volatile as the FIFO registers.
         let rfr = unsafe { read_volatile(&fifo.rfr) };
         if rfr & RFR_FOVR != 0 {
-            let _ = q.enqueue(RxEvent::Overrun);
+            let _ = q.enqueue(RxEvent::OVERRUN);
             unsafe { write_volatile(&mut fifo.rfr, rfr & !RFR_FOVR) };
         }
         if rfr & RFR_FMP == 0 {
@@ -466,8 +465,8 @@ fn can_rx_isr(fifo: &mut ShadowFifo, timer: &SimTimer, q: &mut Queue<RxEvent, 8>
         };
         // Release the mailbox (RFOM); the model's FIFO held one frame.
         unsafe { write_volatile(&mut fifo.rfr, (rfr | RFR_RFOM) & !RFR_FMP & !RFR_RFOM) };
-        if q.enqueue(RxEvent::Frame(regs, now)).is_err() {
-            let _ = q.enqueue(RxEvent::Overrun);
+        if q.enqueue(RxEvent::frame(regs, now)).is_err() {
+            let _ = q.enqueue(RxEvent::OVERRUN);
         }
     }
 }

@@ -226,7 +226,7 @@ impl CanRx {
             if status & RFR_FOVR != 0 {
                 self.overruns = self.overruns.saturating_add(1);
                 rfr.write(|w| unsafe { w.bits(RFR_FOVR) });
-                self.push(queue, RxEvent::Overrun);
+                self.push(queue, RxEvent::OVERRUN);
             }
             if status & RFR_FMP == 0 {
                 return;
@@ -239,7 +239,7 @@ impl CanRx {
                 tdhr: mb.rdhr().read().bits(),
             };
             rfr.write(|w| unsafe { w.bits(RFR_RFOM) });
-            self.push(queue, RxEvent::Frame(regs, now));
+            self.push(queue, RxEvent::frame(regs, now));
         }
     }
 
