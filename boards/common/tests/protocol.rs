@@ -337,7 +337,7 @@ fn bus_off_drops_the_plan_and_mutes_until_recovery() {
         .tx
         .writes
         .iter()
-        .all(|w| w.3 && (w.0 - SLOT) % SLOT == 0));
+        .all(|w| w.3 && (w.0 - SLOT).is_multiple_of(SLOT)));
     assert!(m
         .core
         .tx
