@@ -151,6 +151,14 @@ impl SlotTimer {
         true
     }
 
+    /// Ticks from the commit compare's match to now (bench builds: the slot boundary's
+    /// latency as the hardware saw it, blocking and interrupt entry included).
+    pub fn ticks_since_commit_match(&self) -> u16 {
+        let cnt = self.tim.cnt().read().bits() as u16;
+        let ccr = self.tim.ccr(0).read().bits() as u16;
+        cnt.wrapping_sub(ccr)
+    }
+
     /// TIM2 interrupt: counts half periods; returns (commit due, prepare due). Only flag
     /// work on the commit path: a CC1 match with its interrupt enabled is the boundary
     /// (the compare is only used within 3/4 of a wrap, so it cannot match early).

@@ -23,6 +23,7 @@ use rtcan_core::engine::Engine;
 use rtcan_core::time::Nanos;
 use rtcan_pubsub::ModuleHost;
 
+use crate::cycles;
 use crate::run::DELIVERED;
 
 /// Interrupt of the protocol task (unused by the F103's peripherals in these images).
@@ -93,14 +94,25 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
         let delivered = self.engine.counters().rx_delivered;
         let (e, h, p) = (&mut self.engine, &mut self.host, &mut self.proto);
         while let Some(ev) = rx.dequeue() {
+            let t = cycles::now();
             p.on_rx_event(&ev, e, h, slot);
+            let sync_on_slave = !e.is_master() && ev.regs.frame().is_some_and(|f| f.id().is_sync());
+            if sync_on_slave {
+                cycles::TASK_SYNC_SLAVE.since(t);
+            } else {
+                cycles::TASK_RX_PROCESS.since(t);
+            }
         }
         while let Some(ev) = tx.dequeue() {
+            let t = cycles::now();
             p.on_tx_event(&ev, e, h, slot);
+            cycles::TASK_TX_DONE.since(t);
         }
+        let t = cycles::now();
         p.run(e, h, slot, &mut |e, h, now, c| {
             h.pump(e, now, &mut DynController(c));
         });
+        cycles::TASK_PREPARE_SLOT.since(t);
         if self.engine.counters().rx_delivered != delivered {
             DELIVERED.notify();
         }

@@ -8,6 +8,7 @@
 #![no_std]
 
 pub mod board;
+pub mod cycles;
 pub mod driver;
 pub mod io;
 pub mod run;

@@ -52,6 +52,7 @@ mod app {
     fn init(mut cx: init::Context) -> (Shared, Local) {
         let (bus, board) = fw::board::init(cx.device, filter_set!(module::FILTERS));
         fw::Mono::start(cx.core.SYST, fw::SYSCLK_HZ);
+        fw::cycles::enable(&mut cx.core.DCB, &mut cx.core.DWT);
         // The monotonic leaves SysTick at priority 0 (the highest): below everything,
         // so a tick never delays a slot boundary or a received frame.
         // SAFETY: changes only SysTick's priority, before any task runs.
@@ -96,25 +97,44 @@ mod app {
     /// Slot boundaries and window-close aborts: prepared work only.
     #[task(binds = TIM2, shared = [slot], priority = 4)]
     fn slot_timer(mut cx: slot_timer::Context) {
-        if cx.shared.slot.lock(glue::on_slot_timer) {
+        let t = fw::cycles::now();
+        let (pend, since_match) = cx.shared.slot.lock(|c| {
+            let pend = glue::on_slot_timer(c);
+            let since = if cfg!(feature = "cycles") {
+                c.timer.ticks_since_commit_match()
+            } else {
+                0
+            };
+            (pend, since)
+        });
+        if pend {
             pend_protocol();
+        }
+        fw::cycles::ISR_SLOT_TIMER.since(t);
+        if pend && cfg!(feature = "cycles") {
+            // 9 CPU cycles per 8 MHz tick.
+            fw::cycles::SLOT_BOUNDARY_TO_TXRQ.add(u32::from(since_match) * 9);
         }
     }
 
     /// Received frames: registers and local time into the queue.
     #[task(binds = USB_LP_CAN_RX0, shared = [slot], local = [can_rx, rx_events], priority = 3)]
     fn can_rx(mut cx: can_rx::Context) {
+        let t = fw::cycles::now();
         let now = cx.shared.slot.lock(|c| c.timer.now());
         cx.local.can_rx.on_interrupt(now, cx.local.rx_events);
         pend_protocol();
+        fw::cycles::ISR_CAN_RX.since(t);
     }
 
     /// Mailbox completions into the queue.
     #[task(binds = USB_HP_CAN_TX, shared = [tx_events], local = [can_tx_irq], priority = 3)]
     fn can_tx(mut cx: can_tx::Context) {
+        let t = fw::cycles::now();
         let irq = cx.local.can_tx_irq;
         cx.shared.tx_events.lock(|q| irq.on_interrupt(q));
         pend_protocol();
+        fw::cycles::ISR_CAN_TX.since(t);
     }
 
     /// Error counters; bus-off aborts every mailbox at once.
@@ -142,9 +162,11 @@ mod app {
     async fn module_app(mut cx: module_app::Context) {
         let mut app = App::new();
         let mut safe = fw::run::SafeLog::new();
+        let mut last_report = 0;
         loop {
             cx.local.watchdog.feed();
             let now = cx.shared.slot.lock(|c| c.timer.now());
+            fw::cycles::report(now, &mut last_report);
             let due = app.poll(now, cx.local.hw);
             // What the app published for SRT/NRT waits in its topics: hand it over.
             fw::driver::kick();
