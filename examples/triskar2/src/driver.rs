@@ -99,6 +99,12 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
             let sync_on_slave = !e.is_master() && ev.regs.frame().is_some_and(|f| f.id().is_sync());
             if sync_on_slave {
                 cycles::TASK_SYNC_SLAVE.since(t);
+                // Bring-up check of the TTCM stamps (docs/BRINGUP.md; DEFMT_LOG=debug).
+                defmt::debug!(
+                    "sync: ttcm {=u16} offset {=i64}",
+                    (ev.regs.tdtr >> 16) as u16,
+                    p.sof_clock().offset().unwrap_or(0)
+                );
             } else {
                 cycles::TASK_RX_PROCESS.since(t);
             }
