@@ -37,35 +37,53 @@ pub struct SofClock {
     bit_ns: i64,
     /// 2^32 / bit_ns, rounded up: ns → bits by multiply and shift (a 64-bit division is a
     /// library call of a few hundred instructions on the Cortex-M3).
-    inv_bit_q32: i64,
+    inv_bit_q32: u32,
     /// Drift bound, ppm × 2^20 / 10^6, rounded up.
-    drift_q20: i64,
+    drift_q20: u32,
     /// Local ns at unwrapped counter value 0 (`None` until the first frame). The counter's
     /// absolute value is never needed: a whole number of wraps picked at the first frame
     /// is absorbed by the offset.
     offset: Option<i64>,
     /// Local time of the last offset update.
     updated: i64,
-    /// Estimated counter value (unwrapped) at `updated`.
-    updated_bits: i64,
+    /// Estimated counter value (unwrapped) at `updated`, and its local time under the
+    /// current offset (`offset + anchor_bits * bit_ns`, kept to avoid the multiply).
+    anchor_bits: i64,
+    anchor_local: i64,
 }
 
-/// Gaps between frames up to this many ns are converted to bits by multiply and shift;
-/// longer silences (over 4 s) take the division.
-const FAST_GAP_NS: i64 = 1 << 32;
+/// Gaps between frames below this many ns take the 32-bit path (multiply and shift);
+/// longer silences (over 2 s) take the 64-bit one with a division.
+const FAST_GAP_NS: i64 = 1 << 31;
 
 impl SofClock {
     /// Bit time `bit_ns` (a whole number of ns at every standard rate) and the bound of
     /// the drift between the local and the bus bit clock, `drift_ppm`.
     pub const fn new(bit_ns: u32, drift_ppm: u32) -> Self {
-        let bit_ns = if bit_ns == 0 { 1 } else { bit_ns as i64 };
+        let bit_ns = if bit_ns == 0 { 1 } else { bit_ns as u64 };
         SofClock {
-            bit_ns,
-            inv_bit_q32: ((1i64 << 32) + bit_ns - 1) / bit_ns,
-            drift_q20: (((drift_ppm as i64) << 20) + 999_999) / 1_000_000,
+            bit_ns: bit_ns as i64,
+            inv_bit_q32: {
+                let inv = (1u64 << 32).div_ceil(bit_ns);
+                // 1 ns bits (not a CAN rate) round to 2^32 - 1: off by one bit, harmless.
+                if inv > u32::MAX as u64 {
+                    u32::MAX
+                } else {
+                    inv as u32
+                }
+            },
+            drift_q20: {
+                let q = ((drift_ppm as u64) << 20).div_ceil(1_000_000);
+                if q > u32::MAX as u64 {
+                    u32::MAX
+                } else {
+                    q as u32
+                }
+            },
             offset: None,
             updated: 0,
-            updated_bits: 0,
+            anchor_bits: 0,
+            anchor_local: 0,
         }
     }
 
@@ -74,42 +92,69 @@ impl SofClock {
     /// `valid_bits_min(dlc)`). Also refines the offset estimate.
     pub fn sof(&mut self, time16: u16, min_bits_sof_to_irq: u32, now: u64) -> u64 {
         let now = now.min(i64::MAX as u64 >> 1) as i64;
-        let bits = min_bits_sof_to_irq as i64;
+        let bits = (min_bits_sof_to_irq & 0xFFFF) as i64;
         let bit = self.bit_ns;
-        let (sof_bits, offset) = match self.offset {
-            None => {
-                let sof_bits = time16 as i64;
-                (sof_bits, now - (sof_bits + bits) * bit)
-            }
-            Some(offset) => {
-                // Drift since the last update may make the stored offset too high and so
-                // the estimated counter too low: estimate against an offset lowered by it.
-                let elapsed = (now - self.updated).clamp(0, 1 << 40);
-                let drift_ns = (elapsed * self.drift_q20 + (1 << 20) - 1) >> 20;
-                let gap = elapsed + drift_ns;
-                // Only needs to be within ±32 767 bits: approximations of a bit are fine.
-                let gap_bits = self.bits_in(gap);
-                let est_sof = self.updated_bits + gap_bits - bits;
-                // Nearest value congruent to the stamp (mod 2^16).
-                let delta = time16.wrapping_sub(est_sof as u16) as i16;
-                let sof_bits = est_sof + delta as i64;
-                let candidate = now - (sof_bits + bits) * bit;
-                (sof_bits, candidate.min(offset.saturating_add(drift_ns)))
-            }
+        let Some(offset) = self.offset else {
+            // First frame: anchor the counter at this stamp (its wraps are absorbed).
+            self.offset = Some(now - (time16 as i64 + bits) * bit);
+            self.updated = now;
+            self.anchor_bits = time16 as i64 + bits;
+            self.anchor_local = now;
+            return (now - bits * bit).max(0) as u64;
         };
-        self.offset = Some(offset);
+        // Drift since the last update may make the offset too high and so the estimated
+        // counter too low: estimate against an offset lowered by the drift bound. The
+        // estimate only needs to be within ±32 767 bits: a bit of rounding is harmless.
+        let elapsed = now - self.updated;
+        if (0..FAST_GAP_NS).contains(&elapsed) && bit <= u16::MAX as i64 {
+            return self.sof_fast(offset, time16, bits as u32, now, elapsed as u32);
+        }
+        let e = elapsed.clamp(0, 1 << 40);
+        let drift = (e * self.drift_q20 as i64 + (1 << 20) - 1) >> 20;
+        let gap_bits = (e + drift) / bit;
+        let est16 = (self.anchor_bits + gap_bits - bits) as u16;
+        // Nearest value congruent to the stamp (mod 2^16), relative to the anchor.
+        let rel = gap_bits - bits + time16.wrapping_sub(est16) as i16 as i64;
+        let sof_local = self.anchor_local + rel * bit;
+        // This frame's offset bound minus the current offset (≥ 0 unless it is better).
+        let excess = now - sof_local - bits * bit;
+        let d = excess.min(drift);
+        self.offset = Some(offset + d);
+        // New anchor: the counter at `now` per the new offset.
+        let k = self.bits_in(excess - d);
+        self.anchor_bits += rel + bits + k;
+        self.anchor_local = sof_local + d + (bits + k) * bit;
         self.updated = now;
-        // Counter at `now` under the new offset: this frame's bound, less by how much its
-        // latency and stuff bits exceed the best frame's.
-        let candidate = now - (sof_bits + bits) * bit;
-        self.updated_bits = sof_bits + bits + self.bits_in(candidate - offset);
-        (offset + sof_bits * bit).max(0) as u64
+        (sof_local + d).max(0) as u64
+    }
+
+    /// `sof` for frames less than 2 s apart (every frame on a live bus): the same steps
+    /// in 32-bit quantities, each product one 32 × 32 → 64 multiply (`bit_ns` < 2^16, a
+    /// bit rate above 15.3 kbit/s).
+    fn sof_fast(&mut self, offset: i64, time16: u16, bits: u32, now: i64, elapsed: u32) -> u64 {
+        let bit = self.bit_ns as i32;
+        let drift = ((elapsed as u64 * self.drift_q20 as u64 + (1 << 20) - 1) >> 20) as u32;
+        let gap = elapsed.saturating_add(drift);
+        let gap_bits = ((gap as u64 * self.inv_bit_q32 as u64) >> 32) as i32;
+        let est16 = (self.anchor_bits as u16)
+            .wrapping_add(gap_bits as u16)
+            .wrapping_sub(bits as u16);
+        let rel = gap_bits - bits as i32 + time16.wrapping_sub(est16) as i16 as i32;
+        let sof_local = self.anchor_local + rel as i64 * bit as i64;
+        let excess = now - sof_local - (bits as i32 * bit) as i64;
+        let d = excess.min(drift as i64);
+        self.offset = Some(offset + d);
+        let k = self.bits_in(excess - d) as i32;
+        self.anchor_bits += (rel + bits as i32 + k) as i64;
+        self.anchor_local = sof_local + d + ((bits as i32 + k) as i64 * bit as i64);
+        self.updated = now;
+        (sof_local + d).max(0) as u64
     }
 
     /// `ns` (≥ 0) in bits, rounded down (± 1 bit).
     fn bits_in(&self, ns: i64) -> i64 {
-        if ns < FAST_GAP_NS {
-            (ns * self.inv_bit_q32) >> 32
+        if (0..FAST_GAP_NS).contains(&ns) {
+            ((ns as u64 * self.inv_bit_q32 as u64) >> 32) as i64
         } else {
             ns / self.bit_ns
         }
