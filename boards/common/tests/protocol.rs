@@ -392,3 +392,103 @@ fn rx_stamps_bad_frames_and_overruns() {
         assert_eq!(m.host.delivered.len(), 1);
     }
 }
+
+fn slave_tables() -> NodeTables<'static> {
+    NodeTables {
+        bus: BUS,
+        module: 1,
+        tx: &TX,
+        rx: &[],
+        calendar: &CAL,
+        master_masks: &[],
+    }
+}
+
+/// Cycle length of `BUS`.
+const CYCLE: Nanos = 10 * SLOT;
+
+/// The master's sync frame of cycle `c`, SOF at bus (= local) time `c * CYCLE`, handled
+/// by the slave's protocol task right after it became valid.
+fn feed_sync(m: &mut Module, c: u64) {
+    let frame = rtcan_core::sync::sync_frame(
+        rtcan_core::sync::Sync {
+            cycle: c as u16,
+            mask: 0b1001,
+        },
+        10,
+    );
+    let sof = c * CYCLE;
+    let now = sof + (rtcan_board_common::sof::valid_bits_min(frame.dlc()) as Nanos + 2) * 1_000;
+    m.advance(now);
+    let ev = RxEvent::frame(regs_of(&frame, (sof / 1_000) as u16), now);
+    m.proto
+        .on_rx_event(&ev, &mut m.engine, &mut m.host, &mut Direct(&mut m.core));
+    m.run();
+}
+
+/// HRT frames written in cycle `c` (and when, relative to the cycle's SOF).
+fn hrt_writes(m: &Module, c: u64) -> Vec<Nanos> {
+    m.core
+        .tx
+        .writes
+        .iter()
+        .filter(|w| w.2.frame().unwrap().id().msg_id() == HRT_ID)
+        .map(|w| w.0 - c * CYCLE)
+        .collect()
+}
+
+#[test]
+fn a_slave_transmits_again_only_after_a_sync_following_bus_off() {
+    let mut m = Module::new(slave_tables(), Stamps::Ttcm);
+    m.run();
+    assert_eq!(
+        m.core.timer.prepare, None,
+        "unsynced slave: nothing to wake for"
+    );
+    // Lock (offset, then rate) on two syncs, then its HRT frame goes out in slot 3 of
+    // every cycle, committed at the boundary the sync placed (within the SOF estimate's
+    // error: the sync frame's stuff bits).
+    for c in 1..=4 {
+        feed_sync(&mut m, c);
+        m.advance(c * CYCLE + 5 * SLOT);
+        if c >= 3 {
+            let w = hrt_writes(&m, c);
+            assert_eq!(w.len(), 1, "cycle {c}: {w:?}");
+            assert!(
+                (3 * SLOT..3 * SLOT + 5_000).contains(&w[0]),
+                "cycle {c}: at {}",
+                w[0]
+            );
+            assert!(m.core.tx.writes.iter().all(|w| w.3), "all by commit");
+        }
+        m.complete_all();
+    }
+    // Bus-off in cycle 5 before slot 3, recovered right away: no HRT frame until a sync
+    // frame has been received again.
+    feed_sync(&mut m, 5);
+    m.core.tx.bus_off = true;
+    m.proto.on_tx_event(
+        &TxEvent::BusOff,
+        &mut m.engine,
+        &mut m.host,
+        &mut Direct(&mut m.core),
+    );
+    m.core.tx.bus_off = false;
+    m.core.tx.writes.clear();
+    m.run();
+    // Cycle 5 and 6 without a sync reaching the slave (the master's sync lost).
+    m.advance(7 * CYCLE - SLOT);
+    assert!(m.proto.is_muted());
+    assert!(hrt_writes(&m, 5).is_empty(), "{:?}", m.core.tx.writes);
+    assert!(
+        m.core.tx.writes.is_empty(),
+        "nothing at all before the re-sync"
+    );
+    // The next sync re-synchronises: slot 3 of that cycle carries the HRT frame again.
+    feed_sync(&mut m, 7);
+    assert!(!m.proto.is_muted());
+    m.advance(7 * CYCLE + 5 * SLOT);
+    let w = hrt_writes(&m, 7);
+    assert_eq!(w.len(), 1, "{:?}", m.core.tx.writes);
+    assert!((3 * SLOT..3 * SLOT + 5_000).contains(&w[0]));
+}
