@@ -147,6 +147,8 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
         dma1: dp.DMA1,
     };
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    // Halted by the probe (breakpoint, `probe-rs` attach) the watchdog pauses too.
+    watchdog.stop_on_debug(&dp.DBGMCU, true);
     watchdog.start(WATCHDOG_MS.millis());
     (
         Bus {
