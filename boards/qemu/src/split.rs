@@ -153,21 +153,34 @@ impl SimTimer {
     }
 
     /// The slot-timer interrupt's flag handling: which alarms fired.
-    fn on_interrupt(&mut self) -> (bool, bool) {
-        // SAFETY: plain RAM owned by `self`.
+    /// Interrupt entry (the F103 driver's `SlotTimer::flags`): (commit, prepare, sr).
+    fn flags(&self) -> (bool, bool, u32) {
+        // SAFETY (all accesses here): plain RAM owned by `self`, volatile as registers.
         let sr = unsafe { read_volatile(&self.sr) };
-        unsafe { write_volatile(&mut self.sr, !(sr & (SR_CC1IF | SR_CC3IF))) };
-        let commit = sr & SR_CC1IF != 0;
+        let dier = unsafe { read_volatile(&self.dier) };
+        (
+            sr & SR_CC1IF != 0 && dier & DIER_CC1IE != 0,
+            sr & SR_CC3IF != 0 && dier & DIER_CC3IE != 0,
+            sr,
+        )
+    }
+
+    /// After the commit (`SlotTimer::acknowledge`); rc_w0 flags modelled as "written 0
+    /// clears". No far targets here: the bus model wakes the node at its alarms.
+    fn acknowledge(&mut self, commit: bool, prepare: bool, sr: u32) {
+        unsafe { write_volatile(&mut self.sr, sr & !(SR_CC1IF | SR_CC3IF)) };
+        if commit || prepare {
+            let off =
+                (if commit { DIER_CC1IE } else { 0 }) | (if prepare { DIER_CC3IE } else { 0 });
+            unsafe { write_volatile(&mut self.dier, read_volatile(&self.dier) & !off) };
+        }
+        // The bus model's view of the alarms.
         if commit {
             self.commit_at = None;
-            unsafe { write_volatile(&mut self.dier, self.dier & !DIER_CC1IE) };
         }
-        let prepare = sr & SR_CC3IF != 0;
         if prepare {
             self.prepare_at = Nanos::MAX;
-            unsafe { write_volatile(&mut self.dier, self.dier & !DIER_CC3IE) };
         }
-        (commit, prepare)
     }
 }
 
@@ -188,17 +201,25 @@ impl SlotTimerHw for SimTimer {
         // SAFETY: plain RAM owned by `self`.
         unsafe {
             write_volatile(&mut self.ccr1, value as u32);
-            write_volatile(&mut self.dier, self.dier | DIER_CC1IE);
+            write_volatile(&mut self.sr, read_volatile(&self.sr) & !SR_CC1IF);
+            write_volatile(&mut self.dier, read_volatile(&self.dier) | DIER_CC1IE);
         }
         // The compare matches at that tick (the bus model's event time).
         self.commit_at = Some(target.saturating_mul(TICK_NS));
         true
     }
     fn arm_prepare(&mut self, target: u64) {
+        if target == u64::MAX {
+            // SAFETY: plain RAM owned by `self`.
+            unsafe { write_volatile(&mut self.dier, read_volatile(&self.dier) & !DIER_CC3IE) };
+            self.prepare_at = Nanos::MAX;
+            return;
+        }
         // SAFETY: plain RAM owned by `self`.
         unsafe {
             write_volatile(&mut self.ccr3, target as u16 as u32);
-            write_volatile(&mut self.dier, self.dier | DIER_CC3IE);
+            write_volatile(&mut self.sr, read_volatile(&self.sr) & !SR_CC3IF);
+            write_volatile(&mut self.dier, read_volatile(&self.dier) | DIER_CC3IE);
         }
         self.prepare_at = target.saturating_mul(TICK_NS);
     }
@@ -367,8 +388,10 @@ impl<'t, 'm, H: Host, const RX: usize, const A: usize, const Q: usize>
 
     /// The slot-timer interrupt body: flags, commit, pend the protocol task.
     fn slot_isr(core: &mut Core) -> bool {
-        let (commit, prepare) = core.timer.on_interrupt();
+        let (commit, prepare, sr) = core.timer.flags();
+        // The boundary's TXRQ first, as the F103's `glue::on_slot_timer`.
         let committed = commit && core.on_commit();
+        core.timer.acknowledge(commit, prepare, sr);
         committed || prepare
     }
 }

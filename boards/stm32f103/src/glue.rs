@@ -10,7 +10,12 @@ pub type Core<P> = SlotCore<SlotTimer, CanTx<P>>;
 /// TIM2 interrupt (highest priority): flag work, then the prepared plan's TXRQ stores
 /// and aborts. True when the protocol task must run (plan committed or prepare alarm).
 pub fn on_slot_timer<P>(core: &mut Core<P>) -> bool {
-    let (commit, prepare) = core.timer.on_interrupt();
-    let committed = commit && core.on_commit();
-    committed || prepare
+    let f = core.timer.flags();
+    // The boundary's TXRQ first: the flag bookkeeping can wait until it is stored.
+    let mut committed = f.commit && core.on_commit();
+    let (late_commit, late_prepare) = core.timer.acknowledge(f);
+    if late_commit {
+        committed |= core.on_commit();
+    }
+    committed || f.prepare || late_prepare
 }

@@ -159,31 +159,40 @@ impl SlotTimer {
         cnt.wrapping_sub(ccr)
     }
 
-    /// TIM2 interrupt: counts half periods; returns (commit due, prepare due). Only flag
-    /// work on the commit path: a CC1 match with its interrupt enabled is the boundary
-    /// (the compare is only used within 3/4 of a wrap, so it cannot match early).
-    pub fn on_interrupt(&mut self) -> (bool, bool) {
+    /// TIM2 interrupt entry: which alarms fired (two register reads, nothing written, so
+    /// the commit can follow at once). A CC1 match with its interrupt enabled is the
+    /// boundary: the compare is only used within 3/4 of a wrap, so it cannot match early.
+    pub fn flags(&self) -> TimerFlags {
         let sr = self.tim.sr().read().bits();
         let dier = self.tim.dier().read().bits();
-        let commit = sr & SR_CC1IF != 0 && dier & DIER_CC1IE != 0;
-        let prepare = sr & SR_CC3IF != 0 && dier & DIER_CC3IE != 0;
+        TimerFlags {
+            sr,
+            commit: sr & SR_CC1IF != 0 && dier & DIER_CC1IE != 0,
+            prepare: sr & SR_CC3IF != 0 && dier & DIER_CC3IE != 0,
+        }
+    }
+
+    /// The rest of the interrupt, after the commit: clears the flags, disarms the alarms
+    /// that fired, counts half periods and re-arms far targets that came into range.
+    /// Returns (commit due, prepare due) for targets that were already due then.
+    pub fn acknowledge(&mut self, f: TimerFlags) -> (bool, bool) {
         // rc_w0 flags: write 0 to the ones handled, 1 to leave the others alone.
         self.tim
             .sr()
-            .write(|w| unsafe { w.bits(!(sr & (SR_UIF | SR_CC1IF | SR_CC2IF | SR_CC3IF))) });
-        if commit || prepare {
+            .write(|w| unsafe { w.bits(!(f.sr & (SR_UIF | SR_CC1IF | SR_CC2IF | SR_CC3IF))) });
+        if f.commit || f.prepare {
             let off =
-                (if commit { DIER_CC1IE } else { 0 }) | (if prepare { DIER_CC3IE } else { 0 });
+                (if f.commit { DIER_CC1IE } else { 0 }) | (if f.prepare { DIER_CC3IE } else { 0 });
             self.tim
                 .dier()
                 .modify(|r, w| unsafe { w.bits(r.bits() & !off) });
         }
         let mut late = (false, false);
-        if sr & (SR_UIF | SR_CC2IF) != 0 {
-            if sr & SR_UIF != 0 {
+        if f.sr & (SR_UIF | SR_CC2IF) != 0 {
+            if f.sr & SR_UIF != 0 {
                 self.clock.on_half_period();
             }
-            if sr & SR_CC2IF != 0 {
+            if f.sr & SR_CC2IF != 0 {
                 self.clock.on_half_period();
             }
             // A far target may now be within compare range.
@@ -194,8 +203,18 @@ impl SlotTimer {
                 late.1 = !self.arm(Channel::Prepare, t);
             }
         }
-        (commit || late.0, prepare || late.1)
+        late
     }
+}
+
+/// What a TIM2 interrupt found (`SlotTimer::flags`).
+#[derive(Clone, Copy, Debug)]
+pub struct TimerFlags {
+    sr: u32,
+    /// The commit compare matched: apply the plan.
+    pub commit: bool,
+    /// The prepare alarm fired: pend the protocol task.
+    pub prepare: bool,
 }
 
 impl SlotTimerHw for SlotTimer {
