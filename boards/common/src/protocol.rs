@@ -341,7 +341,7 @@ impl Protocol {
         if frame.id().is_sync() && self.mute == Mute::UntilSync && engine.is_synced() {
             // Re-synchronised after a bus-off: transmit again from the next wake-up.
             self.mute = Mute::Off;
-            self.release_parked();
+            self.release_parked(slot);
         }
     }
 
@@ -396,6 +396,9 @@ impl Protocol {
         P: TxPort,
     {
         let cancelled = slot.lock(|c| {
+            // The status-change interrupt may have blocked it already; blocked until the
+            // module transmits again.
+            c.plan.block();
             let cancelled = c.plan.disarm();
             c.tx.abort(0b111);
             cancelled
@@ -406,10 +409,16 @@ impl Protocol {
         engine.on_bus_off();
     }
 
-    fn release_parked(&mut self) {
+    fn release_parked<L, T, P>(&mut self, slot: &mut L)
+    where
+        L: Lock<SlotCore<T, P>>,
+        T: SlotTimerHw,
+        P: TxPort,
+    {
         // Held-back frames were placed for slots that are over: never send them late.
         self.synthetic |= self.parked;
         self.parked = 0;
+        slot.lock(|c| c.plan.unblock());
     }
 
     /// Everything but RX and completions: mute state, cancelled loads reported as
@@ -427,11 +436,16 @@ impl Protocol {
         P: TxPort,
         H: Host,
     {
+        if self.mute == Mute::Off && slot.lock(|c| c.plan.is_blocked()) {
+            // The status-change interrupt blocked the plan but its event was lost (queue
+            // full): handle the bus-off now.
+            self.on_bus_off(engine, slot);
+        }
         if self.mute == Mute::UntilRecovery && !slot.lock(|c| c.tx.is_bus_off()) {
             if engine.is_master() {
                 // The master's sync defines the slots: its next plan is on time.
                 self.mute = Mute::Off;
-                self.release_parked();
+                self.release_parked(slot);
             } else {
                 self.mute = Mute::UntilSync;
             }
@@ -488,14 +502,20 @@ impl Protocol {
                 slot.lock(|c| c.timer.arm_prepare(u64::MAX));
                 return;
             }
+            // Muted (bus-off): no plan (nothing may be applied); the engine runs at its
+            // wake-ups and whatever it loads is held back by the gate.
+            let muted = self.mute != Mute::Off;
             if at <= now {
-                // Too late to prepare: run it now, loading directly.
-                self.stats.late_prepares = self.stats.late_prepares.saturating_add(1);
+                if !muted {
+                    // Too late to prepare: run it now, loading directly.
+                    self.stats.late_prepares = self.stats.late_prepares.saturating_add(1);
+                }
                 engine.poll(now, &mut self.gate(slot), host);
                 continue;
             }
-            if at - now > self.lead_ns {
-                let ticks = T::ticks_of(at - self.lead_ns);
+            let lead = if muted { 0 } else { self.lead_ns };
+            if at - now > lead {
+                let ticks = T::ticks_of(at - lead);
                 slot.lock(|c| c.timer.arm_prepare(ticks));
                 return;
             }

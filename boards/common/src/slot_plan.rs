@@ -11,6 +11,9 @@ use rtcan_core::time::Nanos;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SlotPlan {
     armed: bool,
+    /// Set by the status-change interrupt at bus-off, before the protocol task has seen
+    /// it: the plan stays but is not applied (the protocol task then drops it).
+    blocked: bool,
     at: Nanos,
     loads: [Option<TxImage>; MAILBOXES],
     aborts: u8,
@@ -33,6 +36,7 @@ impl SlotPlan {
     pub const fn new() -> Self {
         SlotPlan {
             armed: false,
+            blocked: false,
             at: 0,
             loads: [None; MAILBOXES],
             aborts: 0,
@@ -93,7 +97,7 @@ impl SlotPlan {
     /// The slot-timer interrupt's work: loads (TXRQ) first — the boundary's frame is the
     /// latency-critical store —, then the aborts; disarms. False if nothing was armed.
     pub fn commit(&mut self, port: &mut impl TxPort) -> bool {
-        if !self.armed {
+        if !self.armed || self.blocked {
             return false;
         }
         for (m, load) in self.loads.iter().enumerate() {
@@ -106,6 +110,23 @@ impl SlotPlan {
         }
         self.armed = false;
         true
+    }
+
+    /// Bus-off (status-change interrupt): nothing is applied until `unblock`, so a frame
+    /// prepared before the bus-off cannot be loaded after the interrupt aborted the
+    /// mailboxes (it would go out late after the recovery).
+    pub fn block(&mut self) {
+        self.blocked = true;
+    }
+
+    /// Transmitting again (recovered and re-synchronised).
+    pub fn unblock(&mut self) {
+        self.blocked = false;
+    }
+
+    /// True between `block` and `unblock`.
+    pub const fn is_blocked(&self) -> bool {
+        self.blocked
     }
 
     /// Drops the plan (bus-off): returns the mask of mailboxes whose staged load never
@@ -171,6 +192,26 @@ mod tests {
         assert!(!p.is_armed());
         assert!(!p.commit(&mut port), "a plan commits once");
         assert_eq!(port.writes.len(), 1);
+    }
+
+    #[test]
+    fn a_blocked_plan_is_not_applied_until_unblocked() {
+        let mut p = SlotPlan::new();
+        let mut port = Log::default();
+        p.arm(1);
+        assert!(p.stage_load(0, img(1)));
+        p.block();
+        assert!(!p.commit(&mut port), "blocked: nothing applied");
+        assert!(port.writes.is_empty());
+        assert!(p.is_armed(), "the plan stays for the protocol task to drop");
+        assert_eq!(p.disarm(), 0b001);
+        p.arm(2);
+        assert!(p.stage_load(1, img(2)));
+        assert!(p.is_blocked(), "arming keeps the block");
+        assert!(!p.commit(&mut port));
+        p.unblock();
+        assert!(p.commit(&mut port));
+        assert_eq!(port.writes, vec![(1, img(2))]);
     }
 
     #[test]

@@ -306,6 +306,17 @@ fn bus_off_drops_the_plan_and_mutes_until_recovery() {
     m.advance(4 * SLOT - LEAD);
     assert!(m.core.plan.is_armed());
     m.core.tx.bus_off = true;
+    // The status-change interrupt (priority 3) blocks the plan at once; the slot timer
+    // fires before the protocol task (priority 2) has handled the bus-off: the HRT frame
+    // prepared before the bus-off must not be loaded (it would go out after recovery).
+    m.core.plan.block();
+    m.core.tx.writes.clear();
+    m.core.tx.now = 4 * SLOT;
+    m.core.timer.now = 4 * SLOT;
+    m.core.tx.in_commit = true;
+    assert!(!m.core.on_commit(), "a blocked plan is not applied");
+    m.core.tx.in_commit = false;
+    assert!(m.core.tx.writes.is_empty());
     m.proto.on_tx_event(
         &TxEvent::BusOff,
         &mut m.engine,
@@ -491,4 +502,30 @@ fn a_slave_transmits_again_only_after_a_sync_following_bus_off() {
     let w = hrt_writes(&m, 7);
     assert_eq!(w.len(), 1, "{:?}", m.core.tx.writes);
     assert!((3 * SLOT..3 * SLOT + 5_000).contains(&w[0]));
+}
+
+#[test]
+fn a_blocked_plan_without_its_bus_off_event_is_handled_as_bus_off() {
+    let mut m = Module::new(master_tables(), Stamps::Ttcm);
+    m.run();
+    m.advance(SLOT - LEAD);
+    assert!(m.core.plan.is_armed());
+    // The status-change interrupt blocked the plan; its queued event was lost.
+    m.core.tx.bus_off = true;
+    m.core.plan.block();
+    m.run();
+    assert!(m.proto.is_muted());
+    assert_eq!(m.engine.counters().bus_off, 1);
+    assert!(!m.core.plan.is_armed(), "the blocked plan was dropped");
+    // Recovered: transmits again, the plan unblocked.
+    m.core.tx.bus_off = false;
+    m.advance(SLOT + 30 * SLOT);
+    assert!(!m.proto.is_muted());
+    assert!(!m.core.plan.is_blocked());
+    assert!(m
+        .core
+        .tx
+        .writes
+        .iter()
+        .any(|w| w.3 && w.2.frame().unwrap().id().is_sync()));
 }

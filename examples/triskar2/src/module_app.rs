@@ -137,11 +137,22 @@ mod app {
         fw::cycles::ISR_CAN_TX.since(t);
     }
 
-    /// Error counters; bus-off aborts every mailbox at once.
-    #[task(binds = CAN_SCE, shared = [tx_events], local = [can_sce], priority = 3)]
+    /// Error counters; bus-off aborts every mailbox at once and blocks the prepared plan
+    /// (the slot timer must not load it before the protocol task has seen the bus-off).
+    #[task(binds = CAN_SCE, shared = [slot, tx_events], local = [can_sce], priority = 3)]
     fn can_sce(mut cx: can_sce::Context) {
         let sce = cx.local.can_sce;
-        let change = cx.shared.tx_events.lock(|q| sce.on_interrupt(q));
+        let events = &mut cx.shared.tx_events;
+        // Abort and block under the slot timer's ceiling: no commit can slip in between
+        // the abort of every mailbox and the block (a few register accesses, only on a
+        // status change).
+        let change = cx.shared.slot.lock(|c| {
+            let change = events.lock(|q| sce.on_interrupt(q));
+            if change == rtcan_board_stm32f103::ErrorChange::BusOff {
+                c.plan.block();
+            }
+            change
+        });
         match change {
             rtcan_board_stm32f103::ErrorChange::BusOff => defmt::warn!("bus-off"),
             rtcan_board_stm32f103::ErrorChange::Recovered => defmt::info!("bus-off recovered"),
