@@ -205,6 +205,8 @@ where
     T: SlotTimerHw,
     P: TxPort,
 {
+    // Out of line: the engine loads from several places; one copy keeps the images small.
+    #[inline(never)]
     fn load(&mut self, mailbox: Mailbox, frame: &Frame) {
         let m = mailbox.0 as usize;
         if m >= rtcan_core::driver::MAILBOXES {
@@ -224,6 +226,7 @@ where
         });
     }
 
+    #[inline(never)]
     fn abort(&mut self, mailbox: Mailbox) {
         let m = mailbox.0 as usize;
         if m >= rtcan_core::driver::MAILBOXES {
@@ -386,6 +389,8 @@ impl Protocol {
     /// Bus-off seen (status-change interrupt, after it aborted every mailbox): the plan
     /// is dropped so no sync or HRT frame goes out late after the recovery, and nothing is
     /// transmitted until the controller recovered and (on a slave) a sync frame re-synced.
+    #[cold]
+    #[inline(never)]
     pub fn on_bus_off<L, T, P, const RX: usize, const A: usize, const Q: usize>(
         &mut self,
         engine: &mut Engine<'_, RX, A, Q>,
@@ -409,6 +414,8 @@ impl Protocol {
         engine.on_bus_off();
     }
 
+    #[cold]
+    #[inline(never)]
     fn release_parked<L, T, P>(&mut self, slot: &mut L)
     where
         L: Lock<SlotCore<T, P>>,

@@ -106,12 +106,18 @@ impl SofClock {
         // counter too low: estimate against an offset lowered by the drift bound. The
         // estimate only needs to be within ±32 767 bits: a bit of rounding is harmless.
         let elapsed = now - self.updated;
-        if (0..FAST_GAP_NS).contains(&elapsed) && bit <= u16::MAX as i64 {
-            return self.sof_fast(offset, time16, bits as u32, now, elapsed as u32);
-        }
-        let e = elapsed.clamp(0, 1 << 40);
-        let drift = (e * self.drift_q20 as i64 + (1 << 20) - 1) >> 20;
-        let gap_bits = (e + drift) / bit;
+        let (drift, gap_bits) = if (0..FAST_GAP_NS).contains(&elapsed) {
+            // The common case, frames less than 2 s apart: one 32 × 32 → 64 multiply each.
+            let e = elapsed as u32;
+            let drift = ((e as u64 * self.drift_q20 as u64 + (1 << 20) - 1) >> 20) as u32;
+            let gap = e.saturating_add(drift);
+            let gap_bits = (gap as u64 * self.inv_bit_q32 as u64) >> 32;
+            (drift as i64, gap_bits as i64)
+        } else {
+            let e = elapsed.clamp(0, 1 << 40);
+            let drift = (e * self.drift_q20 as i64 + (1 << 20) - 1) >> 20;
+            (drift, (e + drift) / bit)
+        };
         let est16 = (self.anchor_bits + gap_bits - bits) as u16;
         // Nearest value congruent to the stamp (mod 2^16), relative to the anchor.
         let rel = gap_bits - bits + time16.wrapping_sub(est16) as i16 as i64;
@@ -124,29 +130,6 @@ impl SofClock {
         let k = self.bits_in(excess - d);
         self.anchor_bits += rel + bits + k;
         self.anchor_local = sof_local + d + (bits + k) * bit;
-        self.updated = now;
-        (sof_local + d).max(0) as u64
-    }
-
-    /// `sof` for frames less than 2 s apart (every frame on a live bus): the same steps
-    /// in 32-bit quantities, each product one 32 × 32 → 64 multiply (`bit_ns` < 2^16, a
-    /// bit rate above 15.3 kbit/s).
-    fn sof_fast(&mut self, offset: i64, time16: u16, bits: u32, now: i64, elapsed: u32) -> u64 {
-        let bit = self.bit_ns as i32;
-        let drift = ((elapsed as u64 * self.drift_q20 as u64 + (1 << 20) - 1) >> 20) as u32;
-        let gap = elapsed.saturating_add(drift);
-        let gap_bits = ((gap as u64 * self.inv_bit_q32 as u64) >> 32) as i32;
-        let est16 = (self.anchor_bits as u16)
-            .wrapping_add(gap_bits as u16)
-            .wrapping_sub(bits as u16);
-        let rel = gap_bits - bits as i32 + time16.wrapping_sub(est16) as i16 as i32;
-        let sof_local = self.anchor_local + rel as i64 * bit as i64;
-        let excess = now - sof_local - (bits as i32 * bit) as i64;
-        let d = excess.min(drift as i64);
-        self.offset = Some(offset + d);
-        let k = self.bits_in(excess - d) as i32;
-        self.anchor_bits += (rel + bits as i32 + k) as i64;
-        self.anchor_local = sof_local + d + ((bits as i32 + k) as i64 * bit as i64);
         self.updated = now;
         (sof_local + d).max(0) as u64
     }

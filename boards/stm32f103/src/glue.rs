@@ -12,10 +12,7 @@ pub type Core<P> = SlotCore<SlotTimer, CanTx<P>>;
 pub fn on_slot_timer<P>(core: &mut Core<P>) -> bool {
     let f = core.timer.flags();
     // The boundary's TXRQ first: the flag bookkeeping can wait until it is stored.
-    let mut committed = f.commit && core.on_commit();
-    let (late_commit, late_prepare) = core.timer.acknowledge(f);
-    if late_commit {
-        committed |= core.on_commit();
-    }
-    committed || f.prepare || late_prepare
+    let committed = f.commit && core.on_commit();
+    core.timer.acknowledge(f);
+    committed || f.prepare
 }

@@ -173,9 +173,10 @@ impl SlotTimer {
     }
 
     /// The rest of the interrupt, after the commit: clears the flags, disarms the alarms
-    /// that fired, counts half periods and re-arms far targets that came into range.
-    /// Returns (commit due, prepare due) for targets that were already due then.
-    pub fn acknowledge(&mut self, f: TimerFlags) -> (bool, bool) {
+    /// that fired, counts half periods and re-arms far targets that came into range; one
+    /// already due is raised again by a software compare event (the interrupt re-enters
+    /// at once and handles it like a match).
+    pub fn acknowledge(&mut self, f: TimerFlags) {
         // rc_w0 flags: write 0 to the ones handled, 1 to leave the others alone.
         self.tim
             .sr()
@@ -187,7 +188,6 @@ impl SlotTimer {
                 .dier()
                 .modify(|r, w| unsafe { w.bits(r.bits() & !off) });
         }
-        let mut late = (false, false);
         if f.sr & (SR_UIF | SR_CC2IF) != 0 {
             if f.sr & SR_UIF != 0 {
                 self.clock.on_half_period();
@@ -197,13 +197,24 @@ impl SlotTimer {
             }
             // A far target may now be within compare range.
             if let Some(t) = self.commit_later.take() {
-                late.0 = !self.arm(Channel::Commit, t);
+                if !self.arm(Channel::Commit, t) {
+                    self.raise(Channel::Commit);
+                }
             }
             if let Some(t) = self.prepare_later.take() {
-                late.1 = !self.arm(Channel::Prepare, t);
+                if !self.arm(Channel::Prepare, t) {
+                    self.raise(Channel::Prepare);
+                }
             }
         }
-        late
+    }
+
+    /// Software compare event on `ch` with its interrupt enabled: the TIM2 interrupt
+    /// handles it as a match.
+    fn raise(&mut self, ch: Channel) {
+        // EGR.CCxG sits at the bit of SR.CCxIF.
+        self.tim.egr().write(|w| unsafe { w.bits(ch.flag()) });
+        self.set_ie(ch, true);
     }
 }
 
@@ -232,9 +243,8 @@ impl SlotTimerHw for SlotTimer {
             self.prepare_later = None;
             self.set_ie(Channel::Prepare, false);
         } else if !self.arm(Channel::Prepare, at_ticks) {
-            // Already due: pend the timer interrupt through the compare flag.
-            self.tim.egr().write(|w| unsafe { w.bits(1 << 3) });
-            self.set_ie(Channel::Prepare, true);
+            // Already due: pend the timer interrupt through the compare event.
+            self.raise(Channel::Prepare);
         }
     }
 }

@@ -90,8 +90,11 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
     while dp.RCC.cr().read().hserdy().bit_is_clear() {
         polls += 1;
         if polls >= HSE_POLLS {
-            defmt::error!("HSE (8 MHz crystal) not ready after {} polls", HSE_POLLS);
-            defmt::panic!("no HSE: check the 8 MHz crystal");
+            // defmt::panic! logs at error level, then stops (panic-probe).
+            defmt::panic!(
+                "HSE (8 MHz crystal) not ready after {=u32} polls",
+                HSE_POLLS
+            );
         }
     }
     let mut flash = dp.FLASH.constrain();
@@ -118,10 +121,9 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
     let can = dp.CAN.can::<Floating>(dp.USB, (tx, gpioa.pa11), &mut rcc);
     let can = match configure(can, BTR, filters) {
         Ok(parts) => parts,
-        Err(_) => {
-            defmt::error!("CAN did not join the bus (no 11 recessive bits)");
-            defmt::panic!("CAN enable timeout: check the transceiver, its supply, termination");
-        }
+        Err(_) => defmt::panic!(
+            "CAN did not join the bus (no 11 recessive bits): transceiver, supply, termination?"
+        ),
     };
     let timer = match SlotTimer::new(dp.TIM2, &mut rcc, TIM2_CLOCK_HZ) {
         Ok(t) => t,

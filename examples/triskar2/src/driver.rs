@@ -20,6 +20,7 @@ use rtcan_board_stm32f103::glue::Core;
 use rtcan_board_stm32f103::hal::gpio::Floating;
 use rtcan_board_stm32f103::hal::pac::{Interrupt, NVIC};
 use rtcan_core::engine::Engine;
+use rtcan_core::id::CanId;
 use rtcan_core::time::Nanos;
 use rtcan_pubsub::ModuleHost;
 
@@ -30,7 +31,7 @@ use crate::run::DELIVERED;
 pub const PROTOCOL_INTERRUPT: Interrupt = Interrupt::EXTI1;
 /// Capacity of the RX event queue (the FIFO holds 3 frames; the protocol task may be
 /// held off by one prepare, < 3 frames at 1 Mbit/s).
-pub const RX_QUEUE: usize = 16;
+pub const RX_QUEUE: usize = 8;
 /// Capacity of the TX event queue (3 mailboxes, bus-off).
 pub const TX_QUEUE: usize = 8;
 /// Drift bound between the local crystal and the bus bit clock, for SOF mapping.
@@ -96,8 +97,10 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
         while let Some(ev) = rx.dequeue() {
             let t = cycles::now();
             p.on_rx_event(&ev, e, h, slot);
-            let sync_on_slave = !e.is_master() && ev.regs.frame().is_some_and(|f| f.id().is_sync());
-            if sync_on_slave {
+            // From the identifier alone (no frame parse).
+            let sync = !ev.is_overrun()
+                && CanId::from_raw(ev.regs.tir >> 3).is_some_and(|id| id.is_sync());
+            if sync && !e.is_master() {
                 cycles::TASK_SYNC_SLAVE.since(t);
                 // Bring-up check of the TTCM stamps (docs/BRINGUP.md; DEFMT_LOG=debug).
                 defmt::debug!(
