@@ -50,22 +50,33 @@ pub enum SubmitError {
 pub enum TablesError {
     /// More receive topics than `RX`.
     TooManyRx,
-    /// A reassembly buffer ends past `ARENA`.
+    /// A reassembly buffer (`wire_len(size)` bytes: payload plus the transfer CRC of
+    /// multi-frame topics) ends past `ARENA`.
     ArenaTooSmall,
+    /// A reassembly buffer starts before the previous one (in table order) ends: the
+    /// two would overwrite each other (e.g. laid out with `size` instead of `wire_len`,
+    /// so a CRC lands in the next topic's bytes).
+    RxOverlap,
     /// `rx` not sorted by message ID (binary search on receive).
     RxNotSorted,
-    /// A calendar entry names a missing transmit topic, or the calendar is not sorted.
+    /// A topic larger than `MAX_PAYLOAD` (more than 128 fragments).
+    BadSize,
+    /// A calendar entry names a missing transmit topic or a fragment the topic does not
+    /// have, lies outside the hyperperiod, or the calendar is not sorted.
     BadCalendar,
     /// Slots per cycle outside 2..=64, zero slot length, bit rate or hyperperiod.
     BadBus,
 }
 
 /// Checks `tables` against the engine sizes `rx`, `arena` (const: usable in a const assert).
+/// Linear in the tables: receive buffers must be laid out in table order (as rtcan-model
+/// does), each starting at or after the end of the previous one.
 pub const fn check_tables(
     tables: &NodeTables<'_>,
     rx: usize,
     arena: usize,
 ) -> Result<(), TablesError> {
+    use crate::fragment::{wire_len, MAX_PAYLOAD};
     let bus = &tables.bus;
     if bus.slots_per_cycle < 2
         || bus.slots_per_cycle > 64
@@ -82,22 +93,43 @@ pub const fn check_tables(
     // Slice patterns instead of indexing: const fn, and nothing that can panic.
     let mut rest = tables.rx;
     let mut prev: Option<u16> = None;
+    let mut prev_end = 0usize;
     while let [t, tail @ ..] = rest {
-        if t.arena_offset as usize + crate::fragment::wire_len(t.size as usize) > arena {
-            return Err(TablesError::ArenaTooSmall);
+        let size = t.size as usize;
+        if size > MAX_PAYLOAD {
+            return Err(TablesError::BadSize);
         }
         if let Some(p) = prev {
             if p >= t.msg_id.0 {
                 return Err(TablesError::RxNotSorted);
             }
         }
+        let start = t.arena_offset as usize;
+        if start < prev_end {
+            return Err(TablesError::RxOverlap);
+        }
+        prev_end = start + wire_len(size);
+        if prev_end > arena {
+            return Err(TablesError::ArenaTooSmall);
+        }
         prev = Some(t.msg_id.0);
         rest = tail;
     }
+    let mut rest = tables.tx;
+    while let [t, tail @ ..] = rest {
+        if t.size as usize > MAX_PAYLOAD {
+            return Err(TablesError::BadSize);
+        }
+        rest = tail;
+    }
+    let hyper_slots = bus.hyperperiod_cycles as u64 * bus.slots_per_cycle as u64;
     let mut rest = tables.calendar;
     let mut prev: Option<u32> = None;
     while let [c, tail @ ..] = rest {
-        if c.tx as usize >= tables.tx.len() {
+        let Some((_, [topic, ..])) = tables.tx.split_at_checked(c.tx as usize) else {
+            return Err(TablesError::BadCalendar);
+        };
+        if c.fragment >= fragment_count(topic.size as usize) || c.slot as u64 >= hyper_slots {
             return Err(TablesError::BadCalendar);
         }
         if let Some(p) = prev {
@@ -918,9 +950,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             Counters::bump(&mut self.counters.rx_unknown_id);
             return;
         };
+        // Exactly this topic's `wire_len` bytes, not the rest of the arena
+        // (`check_tables` rules out overlaps); a buffer outside the arena drops the frame.
         let start = topic.arena_offset as usize;
-        let Some(buf) = self.arena.get_mut(start..) else {
-            Counters::bump(&mut self.counters.rx_unknown_id);
+        let end = start + crate::fragment::wire_len(topic.size as usize);
+        let Some(buf) = self.arena.get_mut(start..end) else {
+            Counters::bump(&mut self.counters.rx_bad_size);
             return;
         };
         match state.step(buf, topic.size as usize, frame, sof) {

@@ -667,6 +667,118 @@ fn tables_that_do_not_fit_the_engine_are_rejected() {
     const _: () = assert!(check_tables(&EMPTY, 0, 0).is_ok());
 }
 
+/// Receive tables with the given (msg_id, size, arena_offset) rows.
+fn rx_table(rows: &[(u16, u16, u16)]) -> &'static [RxTopic] {
+    let v: Vec<RxTopic> = rows
+        .iter()
+        .map(|&(id, size, arena_offset)| RxTopic {
+            msg_id: MsgId(id),
+            size,
+            arena_offset,
+        })
+        .collect();
+    Box::leak(v.into_boxed_slice())
+}
+
+#[test]
+fn overlapping_and_out_of_range_receive_buffers_are_rejected() {
+    use rtcan_core::engine::{check_tables, TablesError};
+    let p = paper(3);
+    let base = p.tables[1];
+    let with_rx = |rows: &[(u16, u16, u16)]| NodeTables {
+        rx: rx_table(rows),
+        ..base
+    };
+    // 20-byte topic: 22 wire bytes (payload + transfer CRC), then an 8-byte topic.
+    let good = with_rx(&[(0x140, 20, 0), (0x141, 8, 22)]);
+    assert_eq!(check_tables(&good, 16, 30), Ok(()));
+    // The rtcan-paper sim's bug: laid out with `size`, so the CRC (bytes 20..22) of the
+    // first topic lands in the second topic's buffer.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 20, 0), (0x141, 8, 20)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    // Same start, and a buffer inside another one.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 8, 0), (0x141, 8, 0)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 20, 0), (0x141, 2, 10)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    // Laid out against table order: rejected too (the check is linear).
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 8, 8), (0x141, 8, 0)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    // Past the end: the arena must hold wire_len (22), not size (20), for the last topic.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 30),
+        Ok(())
+    );
+    assert_eq!(
+        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 29),
+        Err(TablesError::ArenaTooSmall)
+    );
+    assert_eq!(
+        check_tables(&with_rx(&[(0x141, 8, u16::MAX)]), 16, 512),
+        Err(TablesError::ArenaTooSmall)
+    );
+    // A topic no transfer can carry (1023 bytes > MAX_PAYLOAD), receive or transmit.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 1023, 0)]), 16, 4096),
+        Err(TablesError::BadSize)
+    );
+    let big_tx: &'static [TxTopic] = Box::leak(Box::new([TxTopic {
+        msg_id: MsgId(0x150),
+        class: Class::Srt,
+        size: 1023,
+        deadline_ns: 1,
+    }]));
+    let t = NodeTables {
+        tx: big_tx,
+        calendar: &[],
+        ..base
+    };
+    assert_eq!(check_tables(&t, 16, 512), Err(TablesError::BadSize));
+    assert!(TestEngine::try_new(with_rx(&[(0x140, 8, 0), (0x141, 8, 4)]), 0).is_err());
+    assert!(TestEngine::try_new(good, 0).is_ok());
+}
+
+#[test]
+fn calendar_entries_outside_the_topic_or_hyperperiod_are_rejected() {
+    use rtcan_core::engine::{check_tables, TablesError};
+    let p = paper(3);
+    let base = p.tables[0];
+    assert_eq!(check_tables(&base, 16, 512), Ok(()));
+    let cal = |slot: u32, tx: u8, fragment: u8| NodeTables {
+        calendar: Box::leak(Box::new([CalEntry { slot, tx, fragment }])),
+        ..base
+    };
+    // H_A (tx 0) is one 8-byte frame: fragment 0 only. S (tx 3) is 3 fragments.
+    assert_eq!(check_tables(&cal(5, 0, 0), 16, 512), Ok(()));
+    assert_eq!(
+        check_tables(&cal(5, 0, 1), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+    assert_eq!(check_tables(&cal(5, 3, 2), 16, 512), Ok(()));
+    assert_eq!(
+        check_tables(&cal(5, 3, 3), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+    // One hyperperiod of one 60-slot cycle: slots 0..=59.
+    assert_eq!(check_tables(&cal(59, 0, 0), 16, 512), Ok(()));
+    assert_eq!(
+        check_tables(&cal(60, 0, 0), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+    assert_eq!(
+        check_tables(&cal(5, 5, 0), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+}
+
 #[test]
 fn backup_master_takes_over_when_the_master_dies() {
     let (mut bus, p) = paper_bus(3);
