@@ -10,6 +10,11 @@
 //! `critical_section::Mutex`. A block's value is written only while its single owner
 //! (the publisher's `Loan`) holds it, and read only while a handle holds a reference,
 //! so the `UnsafeCell` contents are never written and read at the same time.
+//!
+//! Wake-ups: a waker is never called inside the critical section. Code inside it only
+//! moves the waker to a "due" slot; `Topic::with` takes the due wakers out before the
+//! section ends and calls them after it, so a `wake()` that runs its task at once (and
+//! publishes, receives or drops a handle on this very topic) finds the state free.
 use core::cell::{RefCell, UnsafeCell};
 use core::mem::MaybeUninit;
 use core::task::Waker;
@@ -76,6 +81,10 @@ struct PoolState<const N: usize> {
     refs: [u8; N],
     stamps: [Nanos; N],
     waker: Option<Waker>,
+    /// The publisher's waker, taken to be called once the critical section ends.
+    woken: Option<Waker>,
+    /// Some waker (publisher's or a subscriber's) is due: checked once per section.
+    wake_due: bool,
 }
 
 impl<const N: usize> PoolState<N> {
@@ -127,9 +136,11 @@ impl<const N: usize> PoolState<N> {
         self.wake_publisher();
     }
 
+    /// Marks the publisher's waker due (called after the critical section, see module doc).
     fn wake_publisher(&mut self) {
         if let Some(w) = self.waker.take() {
-            w.wake();
+            self.woken = Some(w);
+            self.wake_due = true;
         }
     }
 
@@ -147,6 +158,8 @@ struct SubState<const Q: usize> {
     ring: Ring<Q>,
     overflows: u32,
     waker: Option<Waker>,
+    /// The waker taken by a publish, to be called once the critical section ends.
+    woken: Option<Waker>,
     last_rx: Option<Nanos>,
 }
 
@@ -155,6 +168,7 @@ impl<const Q: usize> SubState<Q> {
         ring: Ring::EMPTY,
         overflows: 0,
         waker: None,
+        woken: None,
         last_rx: None,
     };
 }
@@ -176,6 +190,39 @@ struct State<const N: usize, const S: usize, const Q: usize> {
     subs: [SubState<Q>; S],
     remote: RemoteState<Q>,
     stats: TopicStats,
+}
+
+/// Wakers taken out of a critical section, called after it (`Topic::with`).
+struct DueWakers<const S: usize> {
+    publisher: Option<Waker>,
+    subs: [Option<Waker>; S],
+}
+
+impl<const S: usize> DueWakers<S> {
+    fn wake(self) {
+        if let Some(w) = self.publisher {
+            w.wake();
+        }
+        for w in self.subs.into_iter().flatten() {
+            w.wake();
+        }
+    }
+}
+
+impl<const N: usize, const S: usize, const Q: usize> State<N, S, Q> {
+    /// Takes the due wakers out (inside the critical section) if any is due.
+    #[inline(always)]
+    fn take_due(&mut self) -> Option<DueWakers<S>> {
+        if !self.pool.wake_due {
+            return None;
+        }
+        self.pool.wake_due = false;
+        let subs = &mut self.subs;
+        Some(DueWakers {
+            publisher: self.pool.woken.take(),
+            subs: core::array::from_fn(|i| subs.get_mut(i).and_then(|s| s.woken.take())),
+        })
+    }
 }
 
 /// A topic of message type `T` with `N` pool blocks, `S` local subscribers (slots
@@ -238,6 +285,8 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     refs: [0; N],
                     stamps: [0; N],
                     waker: None,
+                    woken: None,
+                    wake_due: false,
                 },
                 subs: [const { SubState::EMPTY }; S],
                 remote: RemoteState {
@@ -306,6 +355,8 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                 miss_flag: false,
             };
             st.pool.waker = None;
+            st.pool.woken = None;
+            st.pool.wake_due = false;
             st.stats = TopicStats::default();
         });
     }
@@ -314,9 +365,19 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         self.with(|st| st.pool.free_count())
     }
 
+    /// Runs `f` on the state in a critical section, then calls the wakers `f` made due,
+    /// outside of it (a waker may re-enter this topic).
     #[inline(always)]
     fn with<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
-        critical_section::with(|cs| f(&mut self.state.borrow_ref_mut(cs)))
+        let (r, due) = critical_section::with(|cs| {
+            let mut st = self.state.borrow_ref_mut(cs);
+            let r = f(&mut st);
+            (r, st.take_due())
+        });
+        if let Some(due) = due {
+            due.wake();
+        }
+        r
     }
 
     /// The value cell of block `idx`.
@@ -612,7 +673,9 @@ fn fan_out<const N: usize, const S: usize, const Q: usize>(
             refs += 1;
         }
         if let Some(w) = sub.waker.take() {
-            w.wake();
+            // Called by `Topic::with` once the critical section ends.
+            sub.woken = Some(w);
+            st.pool.wake_due = true;
         }
     }
     // Wrapping: a rate counter, read as differences (saturating costs the hot path).
