@@ -38,7 +38,8 @@ pub enum Remote {
     None,
     /// Sampled at this module's reserved slots: the latest value is latched.
     Hrt,
-    /// Sent by deadline (EDF): queued for the engine, misses are reported.
+    /// Sent by deadline (EDF): queued for the engine, misses are reported; `publish`
+    /// refuses (the caller is told) while the queue towards the engine is full.
     Srt,
     /// Best effort with back-pressure: `publish` refuses while the engine queue is full.
     Nrt,
@@ -52,7 +53,8 @@ pub struct TopicStats {
     pub published: u32,
     /// `alloc` found no free block.
     pub pool_exhausted: u32,
-    /// SRT messages not handed to the engine because its queue for this topic was full.
+    /// SRT publishes refused because the queue towards the engine was full (the
+    /// publisher got `SendError::QueueFull` / the loan back).
     pub remote_overflows: u32,
     /// HRT values replaced by a newer one before their slot came.
     pub hrt_replaced: u32,
@@ -414,7 +416,8 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     }
 
     /// Publishes the owned block `idx`, stamped `now`. Returns `false` (and does nothing,
-    /// after registering `waker`) when an NRT topic's engine queue is full.
+    /// after registering `waker`) when an SRT or NRT topic's queue towards the engine is
+    /// full: the message is neither sent nor half-published to the local subscribers.
     #[inline(always)]
     pub(crate) fn publish_idx(&self, idx: u8, now: Nanos, waker: Option<&Waker>) -> bool {
         if self.remote != Remote::None {
@@ -428,7 +431,10 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         }
         let mut kick = false;
         let accepted = self.with(|st| {
-            if self.remote == Remote::Nrt && st.remote.pending.is_full() {
+            if matches!(self.remote, Remote::Srt | Remote::Nrt) && st.remote.pending.is_full() {
+                if self.remote == Remote::Srt {
+                    bump(&mut st.stats.remote_overflows);
+                }
                 if let Some(w) = waker {
                     register(&mut st.pool.waker, w);
                 }
@@ -448,12 +454,11 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     }
                 }
                 Remote::Srt | Remote::Nrt => {
+                    // Room was checked above, in this critical section.
                     if st.remote.pending.push(idx) {
                         refs += 1;
                         st.remote.held |= bit(idx);
                         kick = true;
-                    } else {
-                        bump(&mut st.stats.remote_overflows);
                     }
                 }
             }
@@ -637,8 +642,8 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         match self.alloc_idx(value, None) {
             Some(idx) => {
                 if !self.publish_idx(idx, sof, None) {
-                    // Only an NRT topic refuses; a module does not both send and
-                    // receive one topic, but the block must not leak if it does.
+                    // Only an SRT/NRT topic sent by this module refuses; a module does
+                    // not both send and receive one topic, but the block must not leak.
                     self.release(idx);
                     self.with(|st| bump(&mut st.stats.rx_dropped));
                 }

@@ -248,15 +248,34 @@ fn srt_deadline_miss_is_signalled_and_the_block_released() {
 }
 
 #[test]
-fn srt_full_engine_queue_drops_for_the_bus_only_and_counts() {
+fn srt_full_engine_queue_is_reported_to_the_caller() {
     let t = Topic::<u16, 8, 1, 1>::new(Remote::Srt, None);
     let p = t.publisher();
-    p.send(1, 0).unwrap();
-    p.send(2, 0).unwrap(); // engine queue (depth 1) full: local subscriber still gets it
-    assert_eq!(t.stats().remote_overflows, 1);
     let sub = t.subscriber::<0>();
-    assert_eq!(sub.overflows(), 1); // queue length 1: the local one overflowed too
-    assert_eq!(*sub.try_recv().unwrap(), 2);
+    p.send(1, 0).unwrap();
+    // The queue towards the engine (depth 1) is full: the caller is told, nothing is
+    // half-published (the local subscriber does not get it either), the block returns.
+    assert_eq!(p.send(2, 0), Err(SendError::QueueFull));
+    let loan = p.alloc(3).unwrap();
+    let loan = p.publish(loan, 0).unwrap_err().0;
+    assert_eq!(*loan, 3, "handed back, not dropped");
+    drop(loan);
+    assert_eq!(t.stats().remote_overflows, 2);
+    assert_eq!(t.stats().published, 1);
+    assert_eq!(sub.overflows(), 0);
+    assert_eq!(*sub.try_recv().unwrap(), 1);
+    assert_eq!(sub.try_recv().map(|m| *m), None);
+    assert_eq!(t.free_blocks(), 7, "one block waits for the engine");
+    // The engine takes the queued one: room again, and a waiting publisher is woken.
+    let (count, waker) = counting_waker();
+    let mut fut = p.publish_wait(p.alloc(4).unwrap(), 1);
+    assert!(poll_once(&mut fut, &waker).is_pending());
+    let tok = t.pending().unwrap();
+    t.pending_done(tok, true);
+    assert_eq!(wakes(&count), 1);
+    assert!(poll_once(&mut fut, &waker).is_ready());
+    assert_eq!(*sub.try_recv().unwrap(), 4);
+    assert_eq!(p.send(5, 2), Err(SendError::QueueFull));
 }
 
 #[test]
@@ -268,7 +287,8 @@ fn kick_runs_when_a_message_is_queued_for_the_engine() {
     }
     let t = Topic::<u8, 4, 0, 1>::new(Remote::Srt, Some(kick));
     t.publisher().send(1, 0).unwrap();
-    t.publisher().send(2, 0).unwrap(); // overflow: nothing new for the engine
+    // Queue full: refused, nothing new for the engine.
+    assert_eq!(t.publisher().send(2, 0), Err(SendError::QueueFull));
     assert_eq!(KICKS.load(Ordering::SeqCst), 1);
 }
 
