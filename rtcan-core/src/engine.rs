@@ -1022,7 +1022,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         self.pos.start_bus = start_bus;
         self.pos.start_local = start_local;
         self.pos.slot_q16 = (cycle_local << 16) / bus.slots_per_cycle.max(1) as u64;
-        self.pos.inv_q32 = (cycle_ns << 32) / cycle_local;
+        self.pos.inv_q32 = ratio_q32(cycle_ns, cycle_local);
         self.next_boundary = self.pos.boundary(self.pos.next_slot);
         if !was_synced && self.is_synced() {
             host.event(Event::Synced);
@@ -1175,6 +1175,30 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 }
 
+/// `num · 2^32 / den` rounded down (`den` 0 counts as 1), saturating. One 64-bit
+/// division while `num < 2^32` (cycles up to 4.29 s); longer cycles take three, by
+/// 16-bit long division, exact for `den < 2^48` (78 hours; the model's longest cycle is
+/// 1000 s), so a 5 s cycle maps bus time exactly instead of overflowing `num << 32`.
+fn ratio_q32(num: u64, den: u64) -> u64 {
+    let mut den = den.max(1);
+    let mut num = num;
+    if num >> 32 == 0 {
+        return (num << 32) / den;
+    }
+    // Keep `den < 2^48` so the remainders below shift by 16 without overflow.
+    while den >> 48 != 0 {
+        den >>= 1;
+        num >>= 1;
+    }
+    let den = den.max(1);
+    let (q0, r0) = (num / den, num % den);
+    let (q1, r1) = ((r0 << 16) / den, (r0 << 16) % den);
+    let q2 = (r1 << 16) / den;
+    (q0.saturating_mul(1 << 32))
+        .saturating_add(q1 << 16)
+        .saturating_add(q2)
+}
+
 /// DLC of the next frame of a queued item.
 fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
     match *item {
@@ -1186,5 +1210,27 @@ fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
             let index = count.checked_sub(fragment as usize + 1)?;
             Some(wire.saturating_sub(index * 8).min(8) as u8)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ratio_q32;
+
+    #[test]
+    fn ratio_q32_is_exact_on_both_paths() {
+        let exact = |n: u64, d: u64| ((u128::from(n) << 32) / u128::from(d)) as u64;
+        for (n, d) in [
+            (10_000_000, 10_000_123),
+            (4_294_967_295, 4_294_000_000),
+            (5_000_000_000, 4_999_000_001),
+            (5_000_000_000, 5_004_000_000),
+            (1_000_000_000_000, 1_000_300_000_017),
+            (1 << 47, (1 << 47) - 1),
+        ] {
+            assert_eq!(ratio_q32(n, d), exact(n, d), "{n}/{d}");
+        }
+        assert_eq!(ratio_q32(5, 0), 5 << 32);
+        assert_eq!(ratio_q32(u64::MAX, 1), u64::MAX);
     }
 }
