@@ -271,8 +271,10 @@ struct Position {
 }
 
 impl Position {
+    /// Local time of boundary `slot` of this cycle (saturating at the end of time).
     fn boundary(&self, slot: u8) -> Nanos {
-        self.start_local + ((slot as u64 * self.slot_q16) >> 16)
+        self.start_local
+            .saturating_add((slot as u64 * self.slot_q16) >> 16)
     }
 }
 
@@ -438,7 +440,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.promote(now, host);
         }
         let slot_ns = self.tables.bus.slot_ns;
-        while self.next_boundary <= now {
+        // Whole cycles in the past are skipped in O(1); what is left to walk is the rest
+        // of this cycle and at most the next one. The budget only guards the end of time
+        // (boundaries saturating at `Nanos::MAX`).
+        self.skip_missed_cycles(now, host);
+        let mut budget = 2 * u32::from(self.tables.bus.slots_per_cycle) + 2;
+        while self.next_boundary <= now && budget > 0 {
+            budget -= 1;
             // A boundary whose successor has also passed was missed (handler too late):
             // skip it rather than transmit into someone else's slot.
             let late = self.next_boundary.saturating_add(slot_ns) <= now;
@@ -600,14 +608,68 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         host.event(Event::Synced);
     }
 
+    /// When `now` lies two or more cycles past the start of the cycle being executed (a
+    /// forward jump of the local clock, or a stall), moves the position to slot 0 of the
+    /// cycle containing `now` in O(1): exactly where handling every boundary would have
+    /// put it (each cycle advances the local map by the same `cycle_local`), minus the
+    /// per-slot work. The cycles none of whose slots ran count in `cycles_skipped`; the
+    /// HRT transfer in progress is abandoned (its slots passed). Boundaries of the
+    /// landing cycle that have passed are then handled (late) by `poll`: a slave past
+    /// `SYNC_LOSS_CYCLES` without sync reports the loss there.
+    fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) {
+        if self.next_boundary == Nanos::MAX {
+            return;
+        }
+        let bus = self.tables.bus;
+        let spc = bus.slots_per_cycle;
+        let next_start = self.pos.boundary(spc);
+        let cycle_local = next_start.saturating_sub(self.pos.start_local).max(1);
+        if next_start.saturating_add(cycle_local) > now {
+            return; // the common case: no division on the slot path
+        }
+        if self.pos.next_slot >= spc {
+            // Slot 0 of the next cycle is the next boundary: start from there.
+            self.next_cycle();
+        }
+        let ahead = now.saturating_sub(self.pos.start_local) / cycle_local;
+        let skipped = ahead - u64::from(self.pos.next_slot > 0);
+        let hyper = u64::from(bus.hyperperiod_cycles.max(1));
+        let wrap = u64::from(bus.cycle_counter_wrap.max(1));
+        let beats = u64::from(HEARTBEAT_CYCLES);
+        let p = &mut self.pos;
+        p.start_local = p
+            .start_local
+            .saturating_add(ahead.saturating_mul(cycle_local));
+        p.start_bus = p
+            .start_bus
+            .saturating_add(ahead.saturating_mul(bus.cycle_ns()));
+        p.abs_cycle = p.abs_cycle.saturating_add(ahead);
+        p.cycle_in_hyper = ((u64::from(p.cycle_in_hyper) + ahead % hyper) % hyper) as u32;
+        p.counter = ((u64::from(p.counter) + ahead % wrap) % wrap) as u32;
+        p.next_slot = 0;
+        // Keep the heartbeat stagger; a heartbeat due in a skipped cycle goes out next.
+        let due_in = u64::from(p.heartbeat_in);
+        p.heartbeat_in = ((due_in + beats - skipped % beats) % beats) as u8;
+        if skipped > due_in {
+            self.heartbeat_pending = true;
+        }
+        self.next_boundary = p.start_local;
+        self.window_end = 0;
+        self.cursor = CalendarCursor::default();
+        Counters::add(&mut self.counters.cycles_skipped, skipped);
+        if let Some(x) = self.hrt {
+            self.abandon_hrt(x.tx, host);
+        }
+    }
+
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
     fn next_cycle(&mut self) {
         // Borrow, not copy: `BusConfig` is a dozen words and this runs every cycle.
         let bus = &self.tables.bus;
         let p = &mut self.pos;
         p.start_local = p.boundary(bus.slots_per_cycle);
-        p.start_bus += bus.cycle_ns();
-        p.abs_cycle += 1;
+        p.start_bus = p.start_bus.saturating_add(bus.cycle_ns());
+        p.abs_cycle = p.abs_cycle.saturating_add(1);
         p.cycle_in_hyper += 1;
         if p.cycle_in_hyper >= bus.hyperperiod_cycles {
             p.cycle_in_hyper = 0;
@@ -623,7 +685,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// cycle (multiply and shift), else from the slot clock.
     fn bus_time(&self, local: Nanos) -> Nanos {
         match local.checked_sub(self.pos.start_local) {
-            Some(d) if d < 1 << 30 => self.pos.start_bus + ((d * self.pos.inv_q32) >> 32),
+            Some(d) if d < 1 << 30 => self
+                .pos
+                .start_bus
+                .saturating_add((d * self.pos.inv_q32) >> 32),
             _ => self.clock.to_bus(local),
         }
     }

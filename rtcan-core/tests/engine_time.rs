@@ -39,6 +39,15 @@ fn bus(slot_ns: Nanos) -> BusConfig {
 /// Master (reserves slots 1 and 2 of every cycle for nobody: the free window opens at
 /// slot 3) and a slave with one SRT topic of relative deadline `deadline_ns`.
 fn two_nodes(slot_ns: Nanos, deadline_ns: Nanos, slave_ppm: f64) -> Bus {
+    let (master, slave) = tables(slot_ns, deadline_ns);
+    let mut b = Bus::new(1_000_000);
+    b.add(master, 0.0, 0.0);
+    b.add(slave, slave_ppm, 12_345.0);
+    b
+}
+
+/// Tables of `two_nodes`: (master, slave).
+fn tables(slot_ns: Nanos, deadline_ns: Nanos) -> (NodeTables<'static>, NodeTables<'static>) {
     let masks: &'static [u64] = Box::leak(Box::new([0b111u64]));
     let master = NodeTables {
         bus: bus(slot_ns),
@@ -65,10 +74,7 @@ fn two_nodes(slot_ns: Nanos, deadline_ns: Nanos, slave_ppm: f64) -> Bus {
         calendar: &[],
         master_masks: &[],
     };
-    let mut b = Bus::new(1_000_000);
-    b.add(master, 0.0, 0.0);
-    b.add(slave, slave_ppm, 12_345.0);
-    b
+    (master, slave)
 }
 
 /// Submits on the slave 0.3 s into cycle `cycle` (slot 0: no window, so the frame is
@@ -122,4 +128,134 @@ fn longest_cycle_the_model_admits_syncs_and_gives_the_exact_laxity_code() {
     assert_eq!(laxity_code_on_wire(&mut b, slot, 2), 51);
     assert!(b.nodes[1].host.events.contains(&Event::Synced));
     assert_eq!(b.nodes[1].engine.counters().sync_missed, 0);
+}
+
+/// 10 slots of 1 ms: a 10 ms cycle.
+const SLOT: Nanos = 1_000_000;
+const CYCLE: Nanos = SLOT * SPC as u64;
+const HOUR: Nanos = 3_600_000_000_000;
+
+/// Runs `f` on another thread and fails (instead of hanging) if it takes over 20 s.
+fn within_20s<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(20))
+        .expect("poll returned within 20 s")
+}
+
+fn cycle_starts(b: &Bus) -> usize {
+    b.nodes
+        .iter()
+        .map(|n| {
+            n.host
+                .events
+                .iter()
+                .filter(|e| **e == Event::CycleStart)
+                .count()
+        })
+        .sum()
+}
+
+#[test]
+fn master_clock_jump_of_one_hour_skips_to_the_current_slot() {
+    within_20s(|| {
+        let mut b = two_nodes(SLOT, 50_000_000, 0.0);
+        b.nodes[1].alive = false; // the master alone: its own clock defines bus time
+                                  // Cycle 5, 3.5 slots in (cycle 0 starts at one slot).
+        let t0 = SLOT + 5 * CYCLE + 3 * SLOT + SLOT / 2;
+        b.run(t0);
+        assert_eq!(cycle_starts(&b), 6);
+        // The master's clock jumps one hour (360 000 cycles) forward: it lands in cycle
+        // 360 005, 3.5 slots in. Cycles 6..=360 004 were never started.
+        b.nodes[0].offset += HOUR as f64;
+        b.nodes[0].wake = b.now;
+        b.run(t0 + 3 * CYCLE);
+        let c = b.nodes[0].engine.counters();
+        assert_eq!(c.cycles_skipped, 359_999);
+        assert_eq!(c.hrt_late, 0);
+        // Cycle 360 005 (started late, no sync), then 360 006..=360 008 on time.
+        assert_eq!(cycle_starts(&b), 6 + 4);
+        let syncs: Vec<_> = b
+            .log
+            .iter()
+            .filter(|w| w.frame.id().is_sync() && w.sof > t0)
+            .map(|w| (w.sof, w.frame.id().raw()))
+            .collect();
+        let counter = |c: u64| (c % (1 << 15)) as u32;
+        assert_eq!(
+            syncs,
+            vec![
+                (SLOT + 6 * CYCLE, counter(360_006)),
+                (SLOT + 7 * CYCLE, counter(360_007)),
+                (SLOT + 8 * CYCLE, counter(360_008)),
+            ],
+            "syncs on the jumped clock's cycle boundaries, numbered on"
+        );
+    });
+}
+
+#[test]
+fn slave_clock_jump_of_one_hour_reports_sync_loss_and_relocks() {
+    within_20s(|| {
+        let mut b = two_nodes(SLOT, 50_000_000, 0.0);
+        let t0 = SLOT + 5 * CYCLE + 3 * SLOT + SLOT / 2;
+        b.run(t0);
+        assert!(b.nodes[1].engine.is_synced());
+        b.nodes[1].offset += HOUR as f64;
+        b.nodes[1].wake = b.now;
+        b.run(t0 + SLOT);
+        let e = &b.nodes[1].engine;
+        // Lands 3.5 slots into the cycle after 360 000 more: 359 999 never started.
+        assert_eq!(e.counters().cycles_skipped, 359_999);
+        assert!(!e.is_synced());
+        assert_eq!(
+            b.nodes[1].host.events.last(),
+            Some(&Event::SyncLost),
+            "the landing cycle is far past the last sync"
+        );
+        // The master's next syncs relock it (offset, then rate): synced again.
+        b.run(t0 + 4 * CYCLE);
+        assert!(b.nodes[1].engine.is_synced());
+        assert_eq!(
+            b.nodes[1]
+                .host
+                .events
+                .iter()
+                .filter(|e| **e == Event::Synced)
+                .count(),
+            2
+        );
+    });
+}
+
+#[test]
+fn poll_near_the_end_of_time_returns_with_the_next_boundary() {
+    within_20s(|| {
+        let (master, _) = tables(SLOT, 50_000_000);
+        for now in [u64::MAX - 12_345, u64::MAX - 3 * SLOT / 2, u64::MAX] {
+            let mut engine = TestEngine::new(master, 0);
+            let (mut can, mut host) = (TestCan::default(), TestHost::default());
+            let next = engine.poll(now, &mut can, &mut host);
+            // Fresh master: cycle 0 starts at one slot, boundaries every slot from there.
+            let since = u128::from(now) - u128::from(SLOT);
+            let cycle = (since / u128::from(CYCLE)) as u64;
+            let slot = (since % u128::from(CYCLE)) / u128::from(SLOT);
+            let expect = u128::from(SLOT)
+                + u128::from(cycle) * u128::from(CYCLE)
+                + (slot + 1) * u128::from(SLOT);
+            assert_eq!(
+                u128::from(next),
+                expect.min(u128::from(u64::MAX)),
+                "now {now}"
+            );
+            // Far more than u32::MAX cycles: the counter saturates.
+            assert_eq!(engine.counters().cycles_skipped, u32::MAX);
+            assert!(cycle > u64::from(u32::MAX));
+            // Polling again at the returned time does not hang either.
+            let again = engine.poll(next, &mut can, &mut host);
+            assert!(again >= next);
+        }
+    });
 }
