@@ -227,10 +227,15 @@ enum Item {
 enum Loaded {
     Free,
     Sync,
+    /// HRT fragment of transfer `seq`. The mailbox holding fragment 0 (the last) owns
+    /// the transfer's report from the moment it is loaded; `broken`: an earlier
+    /// fragment of it failed, so even if this one is sent the transfer is not.
     Hrt {
         tx: u8,
         token: Token,
         fragment: u8,
+        seq: u8,
+        broken: bool,
     },
     /// Free-window frame; `latest_start` (local) is when it must be aborted if it has
     /// not started, so it cannot overrun the next reserved slot.
@@ -278,11 +283,19 @@ impl Position {
     }
 }
 
+/// The HRT transfer whose fragments are being loaded. Reported exactly once: here if it
+/// is abandoned before its last fragment is loaded, else by that fragment's mailbox
+/// when it completes (a last fragment still retransmitting when the next transfer's
+/// first fragment is loaded completes, and is reported, on its own).
 #[derive(Clone, Copy, Debug)]
 struct HrtTransfer {
     tx: u8,
     token: Token,
     crc: TxCrc,
+    /// Names this transfer's mailboxes (tokens may be reused by the host).
+    seq: u8,
+    /// Fragment 0 is loaded: its mailbox reports the outcome.
+    last_loaded: bool,
 }
 
 /// Engine of one module. `RX`: receive topics; `ARENA`: reassembly bytes; `Q`: SRT/NRT
@@ -310,6 +323,8 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     window_end: Nanos,
     mailboxes: [Loaded; MAILBOXES],
     hrt: Option<HrtTransfer>,
+    /// `seq` of the next HRT transfer (wraps; at most a few are in mailboxes at once).
+    hrt_seq: u8,
     queue: EdfQueue<Item, Q>,
     in_flight: usize,
     heartbeat_pending: bool,
@@ -367,6 +382,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             window_end: 0,
             mailboxes: [Loaded::Free; MAILBOXES],
             hrt: None,
+            hrt_seq: 0,
             queue: EdfQueue::new(),
             in_flight: 0,
             heartbeat_pending: false,
@@ -768,12 +784,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         false
     }
 
+    /// Stops loading the current HRT transfer if it is of topic `tx`; reports it missed
+    /// unless its last fragment's mailbox already owns the report.
     fn abandon_hrt(&mut self, tx: u8, host: &mut impl Host) {
         if let Some(x) = self.hrt.take() {
-            if x.tx == tx {
-                host.tx_done(x.tx, Some(x.token), TxOutcome::DeadlineMissed);
-            } else {
+            if x.tx != tx {
                 self.hrt = Some(x);
+            } else if !x.last_loaded {
+                host.tx_done(x.tx, Some(x.token), TxOutcome::DeadlineMissed);
             }
         }
     }
@@ -785,8 +803,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let count = fragment_count(topic.size as usize);
         if fragment + 1 == count {
             // First fragment: sample the latest value and latch it for the whole transfer.
+            // The previous transfer is done loading: missed if it never got its last
+            // fragment loaded, else its last mailbox reports it when it completes.
             if let Some(stale) = self.hrt.take() {
-                host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
+                if !stale.last_loaded {
+                    host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
+                }
             }
             match host.hrt_sample(tx) {
                 Some(token) => {
@@ -794,7 +816,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         tx,
                         token,
                         crc: TxCrc::NEW,
-                    })
+                        seq: self.hrt_seq,
+                        last_loaded: false,
+                    });
+                    self.hrt_seq = self.hrt_seq.wrapping_add(1);
                 }
                 None => {
                     Counters::bump(&mut self.counters.hrt_empty);
@@ -808,7 +833,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         };
         let payload = host.payload(x.token);
         let crc = x.crc.advance(payload, fragment);
-        let token = x.token;
+        let (token, seq) = (x.token, x.seq);
         let mut data = [0u8; 8];
         let dlc = fragment_data(payload, crc, fragment, &mut data);
         let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else {
@@ -822,12 +847,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 tx,
                 token,
                 fragment,
+                seq,
+                broken: false,
             },
             &frame,
             can,
         ) {
             Counters::bump(&mut self.counters.hrt_late);
             self.abandon_hrt(tx, host);
+        } else if fragment == 0 {
+            if let Some(x) = self.hrt.as_mut() {
+                x.last_loaded = true;
+            }
         }
     }
 
@@ -1118,19 +1149,43 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 tx,
                 token,
                 fragment,
-            } => match result {
-                // Reported only if the transfer is still the active one: an earlier
-                // fragment may have failed, and the transfer was then already reported
-                // (its remaining fragments are discarded by the receivers' CRC).
-                TxResult::Sent if fragment == 0 => {
-                    if self.hrt.is_some_and(|x| x.token == token && x.tx == tx) {
+                seq,
+                broken,
+            } => {
+                let current = self.hrt.filter(|x| x.seq == seq);
+                if fragment == 0 {
+                    // The last fragment's mailbox owns the report, whether or not the
+                    // transfer is still the current one (a retransmission may end after
+                    // the next transfer started, and the host may reuse the token).
+                    if current.is_some() {
                         self.hrt = None;
-                        host.tx_done(tx, Some(token), TxOutcome::Sent);
+                    }
+                    let outcome = if result == TxResult::Sent && !broken {
+                        TxOutcome::Sent
+                    } else {
+                        TxOutcome::DeadlineMissed
+                    };
+                    host.tx_done(tx, Some(token), outcome);
+                } else if result != TxResult::Sent {
+                    // An earlier fragment failed: receivers will drop the transfer.
+                    for mb in self.mailboxes.iter_mut() {
+                        if let Loaded::Hrt {
+                            seq: s,
+                            fragment: 0,
+                            broken,
+                            ..
+                        } = mb
+                        {
+                            if *s == seq {
+                                *broken = true;
+                            }
+                        }
+                    }
+                    if current.is_some() {
+                        self.abandon_hrt(tx, host);
                     }
                 }
-                TxResult::Sent => {}
-                _ => self.abandon_hrt(tx, host),
-            },
+            }
             Loaded::Window { item, key, .. } => {
                 self.in_flight = self.in_flight.saturating_sub(1);
                 match (item, result) {
