@@ -633,7 +633,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// landing cycle that have passed are then handled (late) by `poll`: a slave past
     /// `SYNC_LOSS_CYCLES` without sync reports the loss there.
     fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) {
-        if self.next_boundary == Nanos::MAX {
+        // Fast exit of every on-time poll (one subtraction): skipping needs `now` at
+        // least a whole cycle (two slots or more) past the next boundary.
+        if now.saturating_sub(self.next_boundary) < self.tables.bus.slot_ns
+            || self.next_boundary == Nanos::MAX
+        {
             return;
         }
         let bus = self.tables.bus;
