@@ -456,16 +456,21 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.promote(now, host);
         }
         let slot_ns = self.tables.bus.slot_ns;
-        // Whole cycles in the past are skipped in O(1); what is left to walk is the rest
-        // of this cycle and at most the next one. The budget only guards the end of time
-        // (boundaries saturating at `Nanos::MAX`).
-        self.skip_missed_cycles(now, host);
-        let mut budget = 2 * u32::from(self.tables.bus.slots_per_cycle) + 2;
-        while self.next_boundary <= now && budget > 0 {
-            budget -= 1;
+        while self.next_boundary <= now {
             // A boundary whose successor has also passed was missed (handler too late):
             // skip it rather than transmit into someone else's slot.
             let late = self.next_boundary.saturating_add(slot_ns) <= now;
+            if late {
+                // Only late boundaries pay for this: whole cycles in the past are skipped
+                // in O(1), so at most two cycles of boundaries are ever walked; at the end
+                // of time (boundaries saturated at `Nanos::MAX`) there is nothing to walk.
+                if self.next_boundary == Nanos::MAX {
+                    break;
+                }
+                if self.skip_missed_cycles(now, host) {
+                    continue;
+                }
+            }
             self.slot_boundary(now, late, can, host);
             if !self.is_synced() {
                 return Nanos::MAX;
@@ -632,20 +637,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// HRT transfer in progress is abandoned (its slots passed). Boundaries of the
     /// landing cycle that have passed are then handled (late) by `poll`: a slave past
     /// `SYNC_LOSS_CYCLES` without sync reports the loss there.
-    fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) {
-        // Fast exit of every on-time poll (one subtraction): skipping needs `now` at
-        // least a whole cycle (two slots or more) past the next boundary.
-        if now.saturating_sub(self.next_boundary) < self.tables.bus.slot_ns
-            || self.next_boundary == Nanos::MAX
-        {
-            return;
-        }
+    /// Returns whether it moved.
+    fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) -> bool {
         let bus = self.tables.bus;
         let spc = bus.slots_per_cycle;
         let next_start = self.pos.boundary(spc);
         let cycle_local = next_start.saturating_sub(self.pos.start_local).max(1);
         if next_start.saturating_add(cycle_local) > now {
-            return; // the common case: no division on the slot path
+            return false; // less than a whole cycle to walk: walk it
         }
         if self.pos.next_slot >= spc {
             // Slot 0 of the next cycle is the next boundary: start from there.
@@ -680,6 +679,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if let Some(x) = self.hrt {
             self.abandon_hrt(x.tx, host);
         }
+        true
     }
 
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.

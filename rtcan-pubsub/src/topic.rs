@@ -12,9 +12,10 @@
 //! so the `UnsafeCell` contents are never written and read at the same time.
 //!
 //! Wake-ups: a waker is never called inside the critical section. Code inside it only
-//! moves the waker to a "due" slot; `Topic::with` takes the due wakers out before the
-//! section ends and calls them after it, so a `wake()` that runs its task at once (and
-//! publishes, receives or drops a handle on this very topic) finds the state free.
+//! marks the waker due; `Topic::with` sees the mark as the section ends, takes the due
+//! wakers out (in a section of their own) and calls them after it, so a `wake()` that
+//! runs its task at once (and publishes, receives or drops a handle on this very topic)
+//! finds the state free.
 use core::cell::{RefCell, UnsafeCell};
 use core::mem::MaybeUninit;
 use core::task::Waker;
@@ -83,8 +84,8 @@ struct PoolState<const N: usize> {
     refs: [u8; N],
     stamps: [Nanos; N],
     waker: Option<Waker>,
-    /// The publisher's waker, taken to be called once the critical section ends.
-    woken: Option<Waker>,
+    /// The publisher's waker is to be called once the critical section ends.
+    publisher_due: bool,
     /// Some waker (publisher's or a subscriber's) is due: checked once per section.
     wake_due: bool,
 }
@@ -140,8 +141,8 @@ impl<const N: usize> PoolState<N> {
 
     /// Marks the publisher's waker due (called after the critical section, see module doc).
     fn wake_publisher(&mut self) {
-        if let Some(w) = self.waker.take() {
-            self.woken = Some(w);
+        if self.waker.is_some() {
+            self.publisher_due = true;
             self.wake_due = true;
         }
     }
@@ -160,8 +161,8 @@ struct SubState<const Q: usize> {
     ring: Ring<Q>,
     overflows: u32,
     waker: Option<Waker>,
-    /// The waker taken by a publish, to be called once the critical section ends.
-    woken: Option<Waker>,
+    /// `waker` is to be called once the critical section ends (a publish came).
+    due: bool,
     last_rx: Option<Nanos>,
 }
 
@@ -170,7 +171,7 @@ impl<const Q: usize> SubState<Q> {
         ring: Ring::EMPTY,
         overflows: 0,
         waker: None,
-        woken: None,
+        due: false,
         last_rx: None,
     };
 }
@@ -219,10 +220,20 @@ impl<const N: usize, const S: usize, const Q: usize> State<N, S, Q> {
             return None;
         }
         self.pool.wake_due = false;
+        let publisher = if core::mem::take(&mut self.pool.publisher_due) {
+            self.pool.waker.take()
+        } else {
+            None
+        };
         let subs = &mut self.subs;
         Some(DueWakers {
-            publisher: self.pool.woken.take(),
-            subs: core::array::from_fn(|i| subs.get_mut(i).and_then(|s| s.woken.take())),
+            publisher,
+            subs: core::array::from_fn(|i| {
+                subs.get_mut(i).filter(|s| s.due).and_then(|s| {
+                    s.due = false;
+                    s.waker.take()
+                })
+            }),
         })
     }
 }
@@ -287,7 +298,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     refs: [0; N],
                     stamps: [0; N],
                     waker: None,
-                    woken: None,
+                    publisher_due: false,
                     wake_due: false,
                 },
                 subs: [const { SubState::EMPTY }; S],
@@ -324,7 +335,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
 
     /// Counters.
     pub fn stats(&self) -> TopicStats {
-        self.with(|st| st.stats)
+        self.with_quiet(|st| st.stats)
     }
 
     /// Free pool blocks now.
@@ -357,29 +368,47 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                 miss_flag: false,
             };
             st.pool.waker = None;
-            st.pool.woken = None;
+            st.pool.publisher_due = false;
             st.pool.wake_due = false;
             st.stats = TopicStats::default();
         });
     }
 
     pub fn free_blocks(&self) -> usize {
-        self.with(|st| st.pool.free_count())
+        self.with_quiet(|st| st.pool.free_count())
     }
 
     /// Runs `f` on the state in a critical section, then calls the wakers `f` made due,
-    /// outside of it (a waker may re-enter this topic).
+    /// outside of it (a waker may re-enter this topic). The common path only reads a flag.
     #[inline(always)]
     fn with<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
         let (r, due) = critical_section::with(|cs| {
             let mut st = self.state.borrow_ref_mut(cs);
             let r = f(&mut st);
-            (r, st.take_due())
+            (r, st.pool.wake_due)
         });
+        if due {
+            self.wake_due();
+        }
+        r
+    }
+
+    /// `with` for sections that free no block and queue nothing (reads, alloc, pop,
+    /// flags), so they make no waker due: no flag to check on the way out.
+    #[inline(always)]
+    fn with_quiet<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
+        critical_section::with(|cs| f(&mut self.state.borrow_ref_mut(cs)))
+    }
+
+    /// Takes the due wakers out in a critical section of their own and calls them after
+    /// it (whoever takes them calls them: none is lost or called twice).
+    #[cold]
+    #[inline(never)]
+    fn wake_due(&self) {
+        let due = critical_section::with(|cs| self.state.borrow_ref_mut(cs).take_due());
         if let Some(due) = due {
             due.wake();
         }
-        r
     }
 
     /// The value cell of block `idx`.
@@ -394,7 +423,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// Takes a free block (refcount 1, owned by the caller) and writes `value` into it.
     #[inline(always)]
     pub(crate) fn alloc_idx(&self, value: T, waker: Option<&Waker>) -> Option<u8> {
-        let idx = self.with(|st| match st.pool.alloc() {
+        let idx = self.with_quiet(|st| match st.pool.alloc() {
             Some(i) => Some(i),
             None => {
                 bump(&mut st.stats.pool_exhausted);
@@ -497,7 +526,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// Pops subscriber `id`'s oldest message: (block, stamp).
     #[inline(always)]
     pub(crate) fn pop(&self, id: u8, waker: Option<&Waker>) -> Option<(u8, Nanos)> {
-        self.with(|st| {
+        self.with_quiet(|st| {
             let sub = st.subs.get_mut(usize::from(id))?;
             match sub.ring.pop() {
                 Some(idx) => {
@@ -533,32 +562,32 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     }
 
     pub(crate) fn last_rx(&self, id: u8) -> Option<Nanos> {
-        self.with(|st| st.subs.get(usize::from(id)).and_then(|s| s.last_rx))
+        self.with_quiet(|st| st.subs.get(usize::from(id)).and_then(|s| s.last_rx))
     }
 
     pub(crate) fn overflows(&self, id: u8) -> u32 {
-        self.with(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.overflows))
+        self.with_quiet(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.overflows))
     }
 
     pub(crate) fn queued(&self, id: u8) -> usize {
-        self.with(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.ring.len()))
+        self.with_quiet(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.ring.len()))
     }
 
     // ---- publisher flags --------------------------------------------------
 
     pub(crate) fn take_nothing_flag(&self) -> bool {
-        self.with(|st| core::mem::take(&mut st.remote.nothing_flag))
+        self.with_quiet(|st| core::mem::take(&mut st.remote.nothing_flag))
     }
 
     pub(crate) fn take_miss_flag(&self) -> bool {
-        self.with(|st| core::mem::take(&mut st.remote.miss_flag))
+        self.with_quiet(|st| core::mem::take(&mut st.remote.miss_flag))
     }
 
     // ---- engine side (used by the ports) ------------------------------------
 
     /// HRT slot: hands the latched block to the engine (its reference moves along).
     pub(crate) fn hrt_take(&self) -> Option<Token> {
-        self.with(|st| {
+        self.with_quiet(|st| {
             let idx = core::mem::replace(&mut st.remote.latest, NONE);
             if idx == NONE {
                 // Counted here, where it is known; the `NothingToSend` outcome that
@@ -594,7 +623,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
 
     /// Oldest block waiting for `Engine::submit`.
     pub(crate) fn pending_peek(&self) -> Option<Token> {
-        self.with(|st| st.remote.pending.peek().map(|i| Token(u16::from(i))))
+        self.with_quiet(|st| st.remote.pending.peek().map(|i| Token(u16::from(i))))
     }
 
     /// Removes `token` from the head of the engine queue: its reference moves to the
@@ -625,7 +654,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         let Some(cell) = self.wire.get(usize::from(idx)) else {
             return &[];
         };
-        if !self.with(|st| st.remote.held & bit(idx) != 0) {
+        if !self.with_quiet(|st| st.remote.held & bit(idx) != 0) {
             return &[];
         }
         // SAFETY: the bus side holds a reference to the block, so nobody writes it.
@@ -636,7 +665,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// subscribers, stamped with the start-of-frame time.
     pub(crate) fn deliver_bytes(&self, bytes: &[u8], sof: Nanos) {
         let Some(value) = T::decode(bytes) else {
-            self.with(|st| bump(&mut st.stats.rx_decode_errors));
+            self.with_quiet(|st| bump(&mut st.stats.rx_decode_errors));
             return;
         };
         match self.alloc_idx(value, None) {
@@ -645,10 +674,10 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     // Only an SRT/NRT topic sent by this module refuses; a module does
                     // not both send and receive one topic, but the block must not leak.
                     self.release(idx);
-                    self.with(|st| bump(&mut st.stats.rx_dropped));
+                    self.with_quiet(|st| bump(&mut st.stats.rx_dropped));
                 }
             }
-            None => self.with(|st| bump(&mut st.stats.rx_dropped)),
+            None => self.with_quiet(|st| bump(&mut st.stats.rx_dropped)),
         }
     }
 }
@@ -677,9 +706,9 @@ fn fan_out<const N: usize, const S: usize, const Q: usize>(
         if sub.ring.push(idx) {
             refs += 1;
         }
-        if let Some(w) = sub.waker.take() {
-            // Called by `Topic::with` once the critical section ends.
-            sub.woken = Some(w);
+        if sub.waker.is_some() {
+            // Taken and called by `Topic::with` once the critical section ends.
+            sub.due = true;
             st.pool.wake_due = true;
         }
     }
