@@ -637,7 +637,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// HRT transfer in progress is abandoned (its slots passed). Boundaries of the
     /// landing cycle that have passed are then handled (late) by `poll`: a slave past
     /// `SYNC_LOSS_CYCLES` without sync reports the loss there.
-    /// Returns whether it moved.
+    /// Returns whether it moved. Cold and out of line: it must not weigh on `poll`.
+    #[cold]
+    #[inline(never)]
     fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) -> bool {
         let bus = self.tables.bus;
         let spc = bus.slots_per_cycle;
