@@ -371,7 +371,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 next_slot: 0,
                 start_local: start,
                 start_bus: 0,
-                slot_q16: bus.slot_ns << 16,
+                // At least 1 ns per slot: boundaries always advance (even with
+                // unchecked tables), so the walk in `poll` ends.
+                slot_q16: bus.slot_ns.max(1) << 16,
                 inv_q32: 1 << 32,
                 heartbeat_in: tables.module % HEARTBEAT_CYCLES as u8,
             },
@@ -621,7 +623,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         self.pos.next_slot = 0;
         self.pos.start_local = start_local;
         self.pos.start_bus = c0.saturating_mul(cycle);
-        self.pos.slot_q16 = bus.slot_ns << 16;
+        self.pos.slot_q16 = bus.slot_ns.max(1) << 16;
         self.pos.inv_q32 = 1 << 32;
         self.cursor = CalendarCursor::default();
         self.next_boundary = start_local;
@@ -1123,7 +1125,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             .max(1);
         self.pos.start_bus = start_bus;
         self.pos.start_local = start_local;
-        self.pos.slot_q16 = (cycle_local << 16) / bus.slots_per_cycle.max(1) as u64;
+        self.pos.slot_q16 = ((cycle_local << 16) / bus.slots_per_cycle.max(1) as u64).max(1 << 16);
         self.pos.inv_q32 = ratio_q32(cycle_ns, cycle_local);
         self.next_boundary = self.pos.boundary(self.pos.next_slot);
         if !was_synced && self.is_synced() {
