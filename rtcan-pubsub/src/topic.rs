@@ -260,7 +260,10 @@ unsafe impl<T: Message, const N: usize, const S: usize, const Q: usize> Sync for
 /// queued message of each subscriber (`subscribers * queue`), one held by each
 /// subscriber while it processes (`subscribers`), the engine's share (`remote`: 2 for
 /// HRT = latched + on air, queue depth + 1 for SRT/NRT, 0 if local), and the
-/// publisher's loans (`loans`, usually 1).
+/// publisher's loans (`loans`, usually 1). HRT: a last fragment still retransmitting
+/// when the next transfer starts keeps its block until it completes (the engine reports
+/// each transfer once, when it is really over); a publish in that moment can find the
+/// pool one block short (`PoolExhausted`, counted) unless `remote` is 3.
 pub const fn pool_blocks(subscribers: usize, queue: usize, remote: usize, loans: usize) -> usize {
     subscribers * queue + subscribers + remote + loans
 }
