@@ -461,18 +461,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         while self.next_boundary <= now {
             // A boundary whose successor has also passed was missed (handler too late):
             // skip it rather than transmit into someone else's slot.
+            // A late slot-0 boundary skips whole past cycles in O(1) (`slot_boundary`), so
+            // at most two cycles of boundaries are ever walked.
             let late = self.next_boundary.saturating_add(slot_ns) <= now;
-            if late {
-                // Only late boundaries pay for this: whole cycles in the past are skipped
-                // in O(1), so at most two cycles of boundaries are ever walked; at the end
-                // of time (boundaries saturated at `Nanos::MAX`) there is nothing to walk.
-                if self.next_boundary == Nanos::MAX {
-                    break;
-                }
-                if self.skip_missed_cycles(now, host) {
-                    continue;
-                }
-            }
             self.slot_boundary(now, late, can, host);
             if !self.is_synced() {
                 return Nanos::MAX;
@@ -544,6 +535,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
         let own = self.cursor.take(self.tables.calendar, hyper_slot).copied();
         if slot == 0 {
+            // A late cycle start may be whole cycles behind `now`: skip them (the landing
+            // cycle's slot 0 is then handled on the next round of `poll`'s walk).
+            if late && self.skip_missed_cycles(now, false, host) {
+                return;
+            }
             self.start_cycle(late, can, host);
             return;
         }
@@ -639,10 +635,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// HRT transfer in progress is abandoned (its slots passed). Boundaries of the
     /// landing cycle that have passed are then handled (late) by `poll`: a slave past
     /// `SYNC_LOSS_CYCLES` without sync reports the loss there.
-    /// Returns whether it moved. Cold and out of line: it must not weigh on `poll`.
+    /// `started`: slot 0 of the cycle being executed has run. Returns whether it moved.
+    /// Within three cycles of `Nanos::MAX` the boundaries would saturate: the engine stops
+    /// there (`stop_at_end_of_time`). Cold and out of line: it must not weigh on `poll`.
     #[cold]
     #[inline(never)]
-    fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) -> bool {
+    fn skip_missed_cycles(&mut self, now: Nanos, started: bool, host: &mut impl Host) -> bool {
         let bus = self.tables.bus;
         let spc = bus.slots_per_cycle;
         let next_start = self.pos.boundary(spc);
@@ -650,12 +648,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if next_start.saturating_add(cycle_local) > now {
             return false; // less than a whole cycle to walk: walk it
         }
-        if self.pos.next_slot >= spc {
-            // Slot 0 of the next cycle is the next boundary: start from there.
-            self.next_cycle();
-        }
         let ahead = now.saturating_sub(self.pos.start_local) / cycle_local;
-        let skipped = ahead - u64::from(self.pos.next_slot > 0);
+        let skipped = ahead.saturating_sub(u64::from(started));
         let hyper = u64::from(bus.hyperperiod_cycles.max(1));
         let wrap = u64::from(bus.cycle_counter_wrap.max(1));
         let beats = u64::from(HEARTBEAT_CYCLES);
@@ -683,7 +677,22 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if let Some(x) = self.hrt {
             self.abandon_hrt(x.tx, host);
         }
+        if self.pos.start_local > Nanos::MAX - cycle_local.saturating_mul(3) {
+            self.stop_at_end_of_time();
+        }
         true
+    }
+
+    /// Less than three cycles are left before `Nanos::MAX` (584 years of local time, so
+    /// only reached by a clock jump): boundaries would saturate and never pass, so the
+    /// engine stops for good: no boundaries, not synced (a master included), silent.
+    fn stop_at_end_of_time(&mut self) {
+        self.master = false;
+        self.clock.unlock();
+        self.backup = None;
+        self.promote_at = Nanos::MAX;
+        self.next_boundary = Nanos::MAX;
+        self.window_end = 0;
     }
 
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
