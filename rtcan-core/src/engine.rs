@@ -613,15 +613,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         self.master = true;
         self.tables.master_masks = masks;
         self.clock = SlotClock::master(&bus, start_local.saturating_sub(c0.saturating_mul(cycle)));
-        self.pos.abs_cycle = c0;
-        self.pos.cycle_in_hyper = (c0 % u64::from(bus.hyperperiod_cycles.max(1))) as u32;
-        self.pos.counter = (c0 % u64::from(bus.cycle_counter_wrap.max(1))) as u32;
-        self.pos.next_slot = 0;
+        self.enter_cycle(c0, 0);
         self.pos.start_local = start_local;
-        self.pos.start_bus = c0.saturating_mul(cycle);
         self.pos.slot_q16 = bus.slot_ns.max(1) << 16;
         self.pos.inv_q32 = 1 << 32;
-        self.cursor = CalendarCursor::default();
         self.next_boundary = start_local;
         self.promote_at = Nanos::MAX;
         host.event(Event::Synced);
@@ -641,46 +636,52 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     #[cold]
     #[inline(never)]
     fn skip_missed_cycles(&mut self, now: Nanos, started: bool, host: &mut impl Host) -> bool {
-        let bus = self.tables.bus;
-        let spc = bus.slots_per_cycle;
-        let next_start = self.pos.boundary(spc);
+        let bus = &self.tables.bus;
+        let next_start = self.pos.boundary(bus.slots_per_cycle);
         let cycle_local = next_start.saturating_sub(self.pos.start_local).max(1);
         if next_start.saturating_add(cycle_local) > now {
             return false; // less than a whole cycle to walk: walk it
         }
-        let ahead = now.saturating_sub(self.pos.start_local) / cycle_local;
-        let skipped = ahead.saturating_sub(u64::from(started));
-        let hyper = u64::from(bus.hyperperiod_cycles.max(1));
-        let wrap = u64::from(bus.cycle_counter_wrap.max(1));
-        let beats = u64::from(HEARTBEAT_CYCLES);
+        // `now >= start_local + 2 cycles` here, and `ahead * cycle_local <= now - start_local`.
+        let ahead = (now - self.pos.start_local) / cycle_local;
+        let skipped = ahead - u64::from(started);
+        self.enter_cycle(self.pos.abs_cycle.saturating_add(ahead), 0);
         let p = &mut self.pos;
-        p.start_local = p
-            .start_local
-            .saturating_add(ahead.saturating_mul(cycle_local));
-        p.start_bus = p
-            .start_bus
-            .saturating_add(ahead.saturating_mul(bus.cycle_ns()));
-        p.abs_cycle = p.abs_cycle.saturating_add(ahead);
-        p.cycle_in_hyper = ((u64::from(p.cycle_in_hyper) + ahead % hyper) % hyper) as u32;
-        p.counter = ((u64::from(p.counter) + ahead % wrap) % wrap) as u32;
-        p.next_slot = 0;
+        p.start_local += ahead * cycle_local;
         // Keep the heartbeat stagger; a heartbeat due in a skipped cycle goes out next.
-        let due_in = u64::from(p.heartbeat_in);
-        p.heartbeat_in = ((due_in + beats - skipped % beats) % beats) as u8;
-        if skipped > due_in {
+        let beats = HEARTBEAT_CYCLES as u8;
+        let due_in = p.heartbeat_in % beats;
+        let back = (skipped % u64::from(beats)) as u8;
+        p.heartbeat_in = (due_in + beats - back) % beats;
+        if skipped > u64::from(due_in) {
             self.heartbeat_pending = true;
         }
         self.next_boundary = p.start_local;
         self.window_end = 0;
-        self.cursor = CalendarCursor::default();
         Counters::add(&mut self.counters.cycles_skipped, skipped);
         if let Some(x) = self.hrt {
             self.abandon_hrt(x.tx, host);
         }
-        if self.pos.start_local > Nanos::MAX - cycle_local.saturating_mul(3) {
+        if (Nanos::MAX - self.pos.start_local) / 3 < cycle_local {
             self.stop_at_end_of_time();
         }
         true
+    }
+
+    /// Moves the position to absolute cycle `abs_cycle`, resuming at `next_slot`: the
+    /// derived counters (hyperperiod phase, sync counter), its bus start `abs_cycle ·
+    /// cycle_ns` and the calendar cursor. The caller sets the local map. One copy of
+    /// these divisions for sync, takeover and skip.
+    #[inline(never)]
+    fn enter_cycle(&mut self, abs_cycle: u64, next_slot: u8) {
+        let bus = &self.tables.bus;
+        let p = &mut self.pos;
+        p.abs_cycle = abs_cycle;
+        p.cycle_in_hyper = (abs_cycle % u64::from(bus.hyperperiod_cycles.max(1))) as u32;
+        p.counter = (abs_cycle % u64::from(bus.cycle_counter_wrap.max(1))) as u32;
+        p.start_bus = abs_cycle.saturating_mul(bus.cycle_ns());
+        p.next_slot = next_slot;
+        self.cursor = CalendarCursor::default();
     }
 
     /// Less than three cycles are left before `Nanos::MAX` (584 years of local time, so
@@ -802,7 +803,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     /// Stops loading the current HRT transfer if it is of topic `tx`; reports it missed
-    /// unless its last fragment's mailbox already owns the report.
+    /// unless its last fragment's mailbox already owns the report. Out of line: only
+    /// failure paths call it, and it inlines the host's dispatch.
+    #[inline(never)]
     fn abandon_hrt(&mut self, tx: u8, host: &mut impl Host) {
         if let Some(x) = self.hrt.take() {
             if x.tx != tx {
@@ -1115,21 +1118,15 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if !was_synced || abs_cycle != self.pos.abs_cycle {
             // (Re)start the slot sequence at slot 1 of this cycle: first lock, or the sync
             // is not for the cycle this node is executing (its clock ran slow, or a jump).
-            let hyper = bus.hyperperiod_cycles.max(1) as u64;
-            let wrap = bus.cycle_counter_wrap.max(1) as u64;
-            self.pos.abs_cycle = abs_cycle;
-            self.pos.cycle_in_hyper = (abs_cycle % hyper) as u32;
-            self.pos.counter = (abs_cycle % wrap) as u32;
-            self.pos.next_slot = 1;
-            self.cursor = CalendarCursor::default();
+            self.enter_cycle(abs_cycle, 1);
         }
         // Refresh the cycle map from the slot clock (the only 64-bit divisions, once per
         // cycle): offset from this SOF, slot length from the estimated rate.
-        let start_bus = abs_cycle * cycle_ns;
+        let start_bus = abs_cycle.saturating_mul(cycle_ns);
         let start_local = self.clock.to_local(start_bus);
         let cycle_local = self
             .clock
-            .to_local(start_bus + cycle_ns)
+            .to_local(start_bus.saturating_add(cycle_ns))
             .saturating_sub(start_local)
             .max(1);
         self.pos.start_bus = start_bus;

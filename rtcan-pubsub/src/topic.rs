@@ -195,46 +195,24 @@ struct State<const N: usize, const S: usize, const Q: usize> {
     stats: TopicStats,
 }
 
-/// Wakers taken out of a critical section, called after it (`Topic::with`).
-struct DueWakers<const S: usize> {
-    publisher: Option<Waker>,
-    subs: [Option<Waker>; S],
-}
-
-impl<const S: usize> DueWakers<S> {
-    fn wake(self) {
-        if let Some(w) = self.publisher {
-            w.wake();
-        }
-        for w in self.subs.into_iter().flatten() {
-            w.wake();
-        }
-    }
-}
-
 impl<const N: usize, const S: usize, const Q: usize> State<N, S, Q> {
-    /// Takes the due wakers out (inside the critical section) if any is due.
-    #[inline(always)]
-    fn take_due(&mut self) -> Option<DueWakers<S>> {
-        if !self.pool.wake_due {
-            return None;
+    /// Takes one due waker out (inside the critical section); clears the mark when none
+    /// is left.
+    fn take_one_due(&mut self) -> Option<Waker> {
+        if core::mem::take(&mut self.pool.publisher_due) {
+            if let Some(w) = self.pool.waker.take() {
+                return Some(w);
+            }
+        }
+        for sub in self.subs.iter_mut() {
+            if core::mem::take(&mut sub.due) {
+                if let Some(w) = sub.waker.take() {
+                    return Some(w);
+                }
+            }
         }
         self.pool.wake_due = false;
-        let publisher = if core::mem::take(&mut self.pool.publisher_due) {
-            self.pool.waker.take()
-        } else {
-            None
-        };
-        let subs = &mut self.subs;
-        Some(DueWakers {
-            publisher,
-            subs: core::array::from_fn(|i| {
-                subs.get_mut(i).filter(|s| s.due).and_then(|s| {
-                    s.due = false;
-                    s.waker.take()
-                })
-            }),
-        })
+        None
     }
 }
 
@@ -403,14 +381,16 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         critical_section::with(|cs| f(&mut self.state.borrow_ref_mut(cs)))
     }
 
-    /// Takes the due wakers out in a critical section of their own and calls them after
-    /// it (whoever takes them calls them: none is lost or called twice).
+    /// Takes the due wakers out one by one, each in a critical section of its own, and
+    /// calls each after its section (whoever takes one calls it: none is lost or called
+    /// twice).
     #[cold]
     #[inline(never)]
     fn wake_due(&self) {
-        let due = critical_section::with(|cs| self.state.borrow_ref_mut(cs).take_due());
-        if let Some(due) = due {
-            due.wake();
+        while let Some(w) =
+            critical_section::with(|cs| self.state.borrow_ref_mut(cs).take_one_due())
+        {
+            w.wake();
         }
     }
 
