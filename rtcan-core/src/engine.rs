@@ -1122,7 +1122,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
         // Refresh the cycle map from the slot clock (the only 64-bit divisions, once per
         // cycle): offset from this SOF, slot length from the estimated rate.
-        let start_bus = abs_cycle.saturating_mul(cycle_ns);
+        // No overflow: `abs_cycle` is a (saturated) bus time divided by `cycle_ns`.
+        let start_bus = abs_cycle * cycle_ns;
         let start_local = self.clock.to_local(start_bus);
         let cycle_local = self
             .clock
