@@ -448,7 +448,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     /// Does everything due at local time `now` (slot boundaries, window closes) and
-    /// returns the local time at which it must be called next.
+    /// returns the local time at which it must be called next. O(slots per cycle) however
+    /// late it comes: whole cycles in the past are skipped arithmetically (counted in
+    /// `cycles_skipped`, docs/PROTOCOL.md §5.6), never walked slot by slot.
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
         self.abort_overdue(now, can);
         if !self.master && !self.is_synced() {
