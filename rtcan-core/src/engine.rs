@@ -539,7 +539,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if slot == 0 {
             // A late cycle start may be whole cycles behind `now`: skip them (the landing
             // cycle's slot 0 is then handled on the next round of `poll`'s walk).
-            if late && self.skip_missed_cycles(now, false, host) {
+            if late && self.skip_missed_cycles(now, host) {
                 return;
             }
             self.start_cycle(late, can, host);
@@ -624,20 +624,20 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         host.event(Event::Synced);
     }
 
-    /// When `now` lies two or more cycles past the start of the cycle being executed (a
-    /// forward jump of the local clock, or a stall), moves the position to slot 0 of the
-    /// cycle containing `now` in O(1): exactly where handling every boundary would have
-    /// put it (each cycle advances the local map by the same `cycle_local`), minus the
-    /// per-slot work. The cycles none of whose slots ran count in `cycles_skipped`; the
-    /// HRT transfer in progress is abandoned (its slots passed). Boundaries of the
-    /// landing cycle that have passed are then handled (late) by `poll`: a slave past
-    /// `SYNC_LOSS_CYCLES` without sync reports the loss there.
-    /// `started`: slot 0 of the cycle being executed has run. Returns whether it moved.
-    /// Within three cycles of `Nanos::MAX` the boundaries would saturate: the engine stops
-    /// there (`stop_at_end_of_time`). Cold and out of line: it must not weigh on `poll`.
+    /// Called at a late slot-0 boundary of cycle `a` (not started yet). When `now` is at or
+    /// past the start of cycle `a + 2` (a forward jump of the local clock, or a stall),
+    /// moves the position to slot 0 of the cycle containing `now` in O(1): exactly where
+    /// handling every boundary would have put it (each cycle advances the local map by
+    /// the same `cycle_local`), minus the per-slot work. The cycles none of whose slots
+    /// ran count in `cycles_skipped`; the HRT transfer in progress is abandoned (its slots
+    /// passed). The landing cycle's passed boundaries are then handled (late) by `poll`: a
+    /// slave past `SYNC_LOSS_CYCLES` without sync reports the loss there. Returns whether
+    /// it moved. Within three cycles of `Nanos::MAX` the boundaries would saturate: the
+    /// engine stops there (`stop_at_end_of_time`). Cold and out of line: it must not
+    /// weigh on `poll`.
     #[cold]
     #[inline(never)]
-    fn skip_missed_cycles(&mut self, now: Nanos, started: bool, host: &mut impl Host) -> bool {
+    fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) -> bool {
         let bus = &self.tables.bus;
         let next_start = self.pos.boundary(bus.slots_per_cycle);
         let cycle_local = next_start.saturating_sub(self.pos.start_local).max(1);
@@ -645,8 +645,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return false; // less than a whole cycle to walk: walk it
         }
         // `now >= start_local + 2 cycles` here, and `ahead * cycle_local <= now - start_local`.
+        // Cycles `a .. a + ahead` are skipped (`a` never started).
         let ahead = (now - self.pos.start_local) / cycle_local;
-        let skipped = ahead - u64::from(started);
+        let skipped = ahead;
         self.enter_cycle(self.pos.abs_cycle.saturating_add(ahead), 0);
         let p = &mut self.pos;
         p.start_local += ahead * cycle_local;
