@@ -91,7 +91,8 @@ impl SlotClock {
             return true;
         }
         let d_local = nanos_i64(sof) - nanos_i64(self.anchor_local);
-        let max_gap = MAX_GAP_NS.max(nanos_i64(self.cycle_ns).saturating_mul(3));
+        let cyc = nanos_i64(self.cycle_ns);
+        let max_gap = MAX_GAP_NS.max(cyc.saturating_add(cyc).saturating_add(cyc));
         if d_local <= 0 || d_local > max_gap {
             // Time went backwards, a duplicate timestamp, or a gap too long to bridge:
             // start over from this sync.
