@@ -1,5 +1,6 @@
 //! Compile-time checks the generated code runs on its own tables (`const _: () = assert!(..)`),
 //! so tables edited or generated out of step with the engine's const generics do not build.
+use crate::core::engine::check_tables;
 use crate::core::fragment::wire_len;
 use crate::core::tables::{NodeTables, RxTopic};
 
@@ -17,31 +18,11 @@ pub const fn arena_bytes(mut rx: &[RxTopic]) -> usize {
 }
 
 /// The tables fit an `Engine<'_, RX, ARENA, _>`: one reassembly state per receive topic,
-/// every buffer inside the arena, receive table sorted (binary search), calendar sorted
-/// and naming only transmit topics.
+/// and everything `rtcan_core::engine::check_tables` checks (buffers inside the arena
+/// and not overlapping, receive table sorted, calendar sorted and naming only existing
+/// transmit topics and fragments), so the generated const assertion covers all of it.
 pub const fn tables_fit(t: &NodeTables<'_>, rx_count: usize, arena: usize) -> bool {
-    if t.rx.len() != rx_count || arena_bytes(t.rx) > arena {
-        return false;
-    }
-    let mut rx = t.rx;
-    while let [a, rest @ ..] = rx {
-        if let [b, ..] = rest {
-            if a.msg_id.0 >= b.msg_id.0 {
-                return false;
-            }
-        }
-        rx = rest;
-    }
-    let mut cal = t.calendar;
-    let mut last = 0;
-    while let [c, rest @ ..] = cal {
-        if c.slot < last || c.tx as usize >= t.tx.len() {
-            return false;
-        }
-        last = c.slot;
-        cal = rest;
-    }
-    true
+    t.rx.len() == rx_count && check_tables(t, rx_count, arena).is_ok()
 }
 
 #[cfg(test)]
@@ -105,6 +86,15 @@ mod tests {
         assert!(!tables_fit(&tables(&rx, &cal, &tx), 1, 22), "rx count");
         let unsorted = [rx[1], rx[0]];
         assert!(!tables_fit(&tables(&unsorted, &cal, &tx), 2, 22));
+        // A buffer starting inside the previous one does not build.
+        let overlap = [
+            rx[0],
+            RxTopic {
+                arena_offset: 6,
+                ..rx[1]
+            },
+        ];
+        assert!(!tables_fit(&tables(&overlap, &cal, &tx), 2, 22), "overlap");
         let bad_cal = [CalEntry {
             slot: 1,
             tx: 1,

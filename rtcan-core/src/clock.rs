@@ -7,7 +7,8 @@
 //! received. Integer math in 64 bits only (`mul_div` splits products so they cannot
 //! overflow; 128-bit division is a long software routine on Cortex-M3 and its code
 //! alone was 1.4 KiB of a 32 KiB image). Gaps between syncs longer than `MAX_GAP_NS`
-//! relock instead of extrapolating.
+//! (or three cycles, on buses with cycles longer than that) relock instead of
+//! extrapolating.
 //!
 //! The 2014 C code measured the slot length once at start-up and then only reset the
 //! phase at each sync (original-rtcan-code.md §2–3): drift was never corrected within a
@@ -20,7 +21,9 @@ use crate::time::Nanos;
 /// Parts per billion in one.
 const PPB: i64 = 1_000_000_000;
 /// Longest gap between two syncs bridged with the measured rate (8.5 s, hundreds of
-/// cycles); after a longer silence the slave relocks from scratch.
+/// cycles); after a longer silence the slave relocks from scratch. A bus whose cycle is
+/// longer than a third of this bridges three cycles instead (the rate is measured
+/// between consecutive syncs, so the gap must hold at least one cycle).
 pub const MAX_GAP_NS: i64 = 1 << 33;
 /// Largest rate error believed (1 %, twice the ±5000 ppm crystals are specified for);
 /// a larger measurement means the master restarted or the counter jumped: relock.
@@ -88,7 +91,9 @@ impl SlotClock {
             return true;
         }
         let d_local = nanos_i64(sof) - nanos_i64(self.anchor_local);
-        if d_local <= 0 || d_local > MAX_GAP_NS {
+        let cyc = nanos_i64(self.cycle_ns);
+        let max_gap = MAX_GAP_NS.max(cyc.saturating_add(cyc).saturating_add(cyc));
+        if d_local <= 0 || d_local > max_gap {
             // Time went backwards, a duplicate timestamp, or a gap too long to bridge:
             // start over from this sync.
             self.lock(sof, counter);
@@ -122,7 +127,7 @@ impl SlotClock {
             self.lock(sof, counter);
             return true;
         }
-        let measured = div_round(err * PPB, d_bus);
+        let measured = ppb_of(err, d_bus);
         if measured.abs() > MAX_RATE_PPB {
             self.lock(sof, counter);
             return true;
@@ -216,6 +221,18 @@ fn div_round(a: i64, b: i64) -> i64 {
         return a;
     }
     (a.saturating_mul(2).saturating_add(b)).div_euclid(b.saturating_mul(2))
+}
+
+/// `err · 10⁹ / d_bus` rounded, for `|err| <= d_bus / 100` and `d_bus > 0`: both are
+/// halved until `d_bus < 2^39`, so the product stays below 2^63 (gaps of 550 s and more
+/// lose well under 1 ppb to the halving).
+fn ppb_of(err: i64, d_bus: i64) -> i64 {
+    let (mut err, mut d_bus) = (err, d_bus);
+    while d_bus >= 1 << 39 {
+        err >>= 1;
+        d_bus >>= 1;
+    }
+    div_round(err.saturating_mul(PPB), d_bus)
 }
 
 /// `a * num / den` rounded, without overflow for `0 < den < 2^31` and `|num| < 2^31`:

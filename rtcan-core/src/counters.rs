@@ -42,11 +42,18 @@ pub struct Counters {
     pub sync_missed: u32,
     /// Bus-off entries reported by the driver.
     pub bus_off: u32,
+    /// Whole cycles skipped without handling any of their slots, because `poll` came
+    /// more than a cycle late (a forward jump of the local clock, or a long stall).
+    pub cycles_skipped: u32,
 }
 
 impl Counters {
     /// Adds one, saturating.
     pub fn bump(c: &mut u32) {
         *c = c.saturating_add(1);
+    }
+    /// Adds `n`, saturating.
+    pub fn add(c: &mut u32, n: u64) {
+        *c = c.saturating_add(u32::try_from(n).unwrap_or(u32::MAX));
     }
 }

@@ -50,22 +50,33 @@ pub enum SubmitError {
 pub enum TablesError {
     /// More receive topics than `RX`.
     TooManyRx,
-    /// A reassembly buffer ends past `ARENA`.
+    /// A reassembly buffer (`wire_len(size)` bytes: payload plus the transfer CRC of
+    /// multi-frame topics) ends past `ARENA`.
     ArenaTooSmall,
+    /// A reassembly buffer starts before the previous one (in table order) ends: the
+    /// two would overwrite each other (e.g. laid out with `size` instead of `wire_len`,
+    /// so a CRC lands in the next topic's bytes).
+    RxOverlap,
     /// `rx` not sorted by message ID (binary search on receive).
     RxNotSorted,
-    /// A calendar entry names a missing transmit topic, or the calendar is not sorted.
+    /// A topic larger than `MAX_PAYLOAD` (more than 128 fragments).
+    BadSize,
+    /// A calendar entry names a missing transmit topic or a fragment the topic does not
+    /// have, lies outside the hyperperiod, or the calendar is not sorted.
     BadCalendar,
     /// Slots per cycle outside 2..=64, zero slot length, bit rate or hyperperiod.
     BadBus,
 }
 
 /// Checks `tables` against the engine sizes `rx`, `arena` (const: usable in a const assert).
+/// Linear in the tables: receive buffers must be laid out in table order (as rtcan-model
+/// does), each starting at or after the end of the previous one.
 pub const fn check_tables(
     tables: &NodeTables<'_>,
     rx: usize,
     arena: usize,
 ) -> Result<(), TablesError> {
+    use crate::fragment::{wire_len, MAX_PAYLOAD};
     let bus = &tables.bus;
     if bus.slots_per_cycle < 2
         || bus.slots_per_cycle > 64
@@ -82,22 +93,43 @@ pub const fn check_tables(
     // Slice patterns instead of indexing: const fn, and nothing that can panic.
     let mut rest = tables.rx;
     let mut prev: Option<u16> = None;
+    let mut prev_end = 0usize;
     while let [t, tail @ ..] = rest {
-        if t.arena_offset as usize + crate::fragment::wire_len(t.size as usize) > arena {
-            return Err(TablesError::ArenaTooSmall);
+        let size = t.size as usize;
+        if size > MAX_PAYLOAD {
+            return Err(TablesError::BadSize);
         }
         if let Some(p) = prev {
             if p >= t.msg_id.0 {
                 return Err(TablesError::RxNotSorted);
             }
         }
+        let start = t.arena_offset as usize;
+        if start < prev_end {
+            return Err(TablesError::RxOverlap);
+        }
+        prev_end = start + wire_len(size);
+        if prev_end > arena {
+            return Err(TablesError::ArenaTooSmall);
+        }
         prev = Some(t.msg_id.0);
         rest = tail;
     }
+    let mut rest = tables.tx;
+    while let [t, tail @ ..] = rest {
+        if t.size as usize > MAX_PAYLOAD {
+            return Err(TablesError::BadSize);
+        }
+        rest = tail;
+    }
+    let hyper_slots = bus.hyperperiod_cycles as u64 * bus.slots_per_cycle as u64;
     let mut rest = tables.calendar;
     let mut prev: Option<u32> = None;
     while let [c, tail @ ..] = rest {
-        if c.tx as usize >= tables.tx.len() {
+        let Some((_, [topic, ..])) = tables.tx.split_at_checked(c.tx as usize) else {
+            return Err(TablesError::BadCalendar);
+        };
+        if c.fragment >= fragment_count(topic.size as usize) || c.slot as u64 >= hyper_slots {
             return Err(TablesError::BadCalendar);
         }
         if let Some(p) = prev {
@@ -195,10 +227,15 @@ enum Item {
 enum Loaded {
     Free,
     Sync,
+    /// HRT fragment of transfer `seq`. The mailbox holding fragment 0 (the last) owns
+    /// the transfer's report from the moment it is loaded; `broken`: an earlier
+    /// fragment of it failed, so even if this one is sent the transfer is not.
     Hrt {
         tx: u8,
         token: Token,
         fragment: u8,
+        seq: u8,
+        broken: bool,
     },
     /// Free-window frame; `latest_start` (local) is when it must be aborted if it has
     /// not started, so it cannot overrun the next reserved slot.
@@ -239,16 +276,26 @@ struct Position {
 }
 
 impl Position {
+    /// Local time of boundary `slot` of this cycle (saturating at the end of time).
     fn boundary(&self, slot: u8) -> Nanos {
-        self.start_local + ((slot as u64 * self.slot_q16) >> 16)
+        self.start_local
+            .saturating_add((slot as u64 * self.slot_q16) >> 16)
     }
 }
 
+/// The HRT transfer whose fragments are being loaded. Reported exactly once: here if it
+/// is abandoned before its last fragment is loaded, else by that fragment's mailbox
+/// when it completes (a last fragment still retransmitting when the next transfer's
+/// first fragment is loaded completes, and is reported, on its own).
 #[derive(Clone, Copy, Debug)]
 struct HrtTransfer {
     tx: u8,
     token: Token,
     crc: TxCrc,
+    /// Names this transfer's mailboxes (tokens may be reused by the host).
+    seq: u8,
+    /// Fragment 0 is loaded: its mailbox reports the outcome.
+    last_loaded: bool,
 }
 
 /// Engine of one module. `RX`: receive topics; `ARENA`: reassembly bytes; `Q`: SRT/NRT
@@ -276,6 +323,8 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     window_end: Nanos,
     mailboxes: [Loaded; MAILBOXES],
     hrt: Option<HrtTransfer>,
+    /// `seq` of the next HRT transfer (wraps; at most a few are in mailboxes at once).
+    hrt_seq: u8,
     queue: EdfQueue<Item, Q>,
     in_flight: usize,
     heartbeat_pending: bool,
@@ -322,7 +371,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 next_slot: 0,
                 start_local: start,
                 start_bus: 0,
-                slot_q16: bus.slot_ns << 16,
+                // At least 1 ns per slot: boundaries always advance (even with
+                // unchecked tables), so the walk in `poll` ends.
+                slot_q16: bus.slot_ns.max(1) << 16,
                 inv_q32: 1 << 32,
                 heartbeat_in: tables.module % HEARTBEAT_CYCLES as u8,
             },
@@ -333,6 +384,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             window_end: 0,
             mailboxes: [Loaded::Free; MAILBOXES],
             hrt: None,
+            hrt_seq: 0,
             queue: EdfQueue::new(),
             in_flight: 0,
             heartbeat_pending: false,
@@ -396,7 +448,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     /// Does everything due at local time `now` (slot boundaries, window closes) and
-    /// returns the local time at which it must be called next.
+    /// returns the local time at which it must be called next. O(slots per cycle) however
+    /// late it comes: whole cycles in the past are skipped arithmetically (counted in
+    /// `cycles_skipped`, docs/PROTOCOL.md §5.6), never walked slot by slot.
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
         self.abort_overdue(now, can);
         if !self.master && !self.is_synced() {
@@ -409,6 +463,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         while self.next_boundary <= now {
             // A boundary whose successor has also passed was missed (handler too late):
             // skip it rather than transmit into someone else's slot.
+            // A late slot-0 boundary skips whole past cycles in O(1) (`slot_boundary`), so
+            // at most two cycles of boundaries are ever walked.
             let late = self.next_boundary.saturating_add(slot_ns) <= now;
             self.slot_boundary(now, late, can, host);
             if !self.is_synced() {
@@ -481,6 +537,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
         let own = self.cursor.take(self.tables.calendar, hyper_slot).copied();
         if slot == 0 {
+            // A late cycle start may be whole cycles behind `now`: skip them (the landing
+            // cycle's slot 0 is then handled on the next round of `poll`'s walk).
+            if late && self.skip_missed_cycles(now, host) {
+                return;
+            }
             self.start_cycle(late, can, host);
             return;
         }
@@ -554,18 +615,88 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         self.master = true;
         self.tables.master_masks = masks;
         self.clock = SlotClock::master(&bus, start_local.saturating_sub(c0.saturating_mul(cycle)));
-        self.pos.abs_cycle = c0;
-        self.pos.cycle_in_hyper = (c0 % u64::from(bus.hyperperiod_cycles.max(1))) as u32;
-        self.pos.counter = (c0 % u64::from(bus.cycle_counter_wrap.max(1))) as u32;
-        self.pos.next_slot = 0;
+        self.enter_cycle(c0, 0);
         self.pos.start_local = start_local;
-        self.pos.start_bus = c0.saturating_mul(cycle);
-        self.pos.slot_q16 = bus.slot_ns << 16;
+        self.pos.slot_q16 = bus.slot_ns.max(1) << 16;
         self.pos.inv_q32 = 1 << 32;
-        self.cursor = CalendarCursor::default();
         self.next_boundary = start_local;
         self.promote_at = Nanos::MAX;
         host.event(Event::Synced);
+    }
+
+    /// Called at a late slot-0 boundary of cycle `a` (not started yet). When `now` is at or
+    /// past the start of cycle `a + 2` (a forward jump of the local clock, or a stall),
+    /// moves the position to slot 0 of the cycle containing `now` in O(1): exactly where
+    /// handling every boundary would have put it (each cycle advances the local map by
+    /// the same `cycle_local`), minus the per-slot work. The cycles none of whose slots
+    /// ran count in `cycles_skipped`; the HRT transfer in progress is abandoned (its slots
+    /// passed). The landing cycle's passed boundaries are then handled (late) by `poll`: a
+    /// slave past `SYNC_LOSS_CYCLES` without sync reports the loss there. Returns whether
+    /// it moved. Within three cycles of `Nanos::MAX` the boundaries would saturate: the
+    /// engine stops there (`stop_at_end_of_time`). Cold and out of line: it must not
+    /// weigh on `poll`.
+    #[cold]
+    #[inline(never)]
+    fn skip_missed_cycles(&mut self, now: Nanos, host: &mut impl Host) -> bool {
+        let bus = &self.tables.bus;
+        let next_start = self.pos.boundary(bus.slots_per_cycle);
+        let cycle_local = next_start.saturating_sub(self.pos.start_local).max(1);
+        if next_start.saturating_add(cycle_local) > now {
+            return false; // less than a whole cycle to walk: walk it
+        }
+        // `now >= start_local + 2 cycles` here, and `ahead * cycle_local <= now - start_local`.
+        // Cycles `a .. a + ahead` are skipped (`a` never started).
+        let ahead = (now - self.pos.start_local) / cycle_local;
+        let skipped = ahead;
+        self.enter_cycle(self.pos.abs_cycle.saturating_add(ahead), 0);
+        let p = &mut self.pos;
+        p.start_local += ahead * cycle_local;
+        // Keep the heartbeat stagger; a heartbeat due in a skipped cycle goes out next.
+        let beats = HEARTBEAT_CYCLES as u8;
+        let due_in = p.heartbeat_in % beats;
+        let back = (skipped % u64::from(beats)) as u8;
+        p.heartbeat_in = (due_in + beats - back) % beats;
+        if skipped > u64::from(due_in) {
+            self.heartbeat_pending = true;
+        }
+        self.next_boundary = p.start_local;
+        self.window_end = 0;
+        Counters::add(&mut self.counters.cycles_skipped, skipped);
+        if let Some(x) = self.hrt {
+            self.abandon_hrt(x.tx, host);
+        }
+        if (Nanos::MAX - self.pos.start_local) / 3 < cycle_local {
+            self.stop_at_end_of_time();
+        }
+        true
+    }
+
+    /// Moves the position to absolute cycle `abs_cycle`, resuming at `next_slot`: the
+    /// derived counters (hyperperiod phase, sync counter), its bus start `abs_cycle ·
+    /// cycle_ns` and the calendar cursor. The caller sets the local map. One copy of
+    /// these divisions for sync, takeover and skip.
+    #[inline(never)]
+    fn enter_cycle(&mut self, abs_cycle: u64, next_slot: u8) {
+        let bus = &self.tables.bus;
+        let p = &mut self.pos;
+        p.abs_cycle = abs_cycle;
+        p.cycle_in_hyper = (abs_cycle % u64::from(bus.hyperperiod_cycles.max(1))) as u32;
+        p.counter = (abs_cycle % u64::from(bus.cycle_counter_wrap.max(1))) as u32;
+        p.start_bus = abs_cycle.saturating_mul(bus.cycle_ns());
+        p.next_slot = next_slot;
+        self.cursor = CalendarCursor::default();
+    }
+
+    /// Less than three cycles are left before `Nanos::MAX` (584 years of local time, so
+    /// only reached by a clock jump): boundaries would saturate and never pass, so the
+    /// engine stops for good: no boundaries, not synced (a master included), silent.
+    fn stop_at_end_of_time(&mut self) {
+        self.master = false;
+        self.clock.unlock();
+        self.backup = None;
+        self.promote_at = Nanos::MAX;
+        self.next_boundary = Nanos::MAX;
+        self.window_end = 0;
     }
 
     /// Moves the position to slot 0 of the next cycle, extrapolating the local map.
@@ -574,8 +705,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let bus = &self.tables.bus;
         let p = &mut self.pos;
         p.start_local = p.boundary(bus.slots_per_cycle);
-        p.start_bus += bus.cycle_ns();
-        p.abs_cycle += 1;
+        p.start_bus = p.start_bus.saturating_add(bus.cycle_ns());
+        p.abs_cycle = p.abs_cycle.saturating_add(1);
         p.cycle_in_hyper += 1;
         if p.cycle_in_hyper >= bus.hyperperiod_cycles {
             p.cycle_in_hyper = 0;
@@ -591,7 +722,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// cycle (multiply and shift), else from the slot clock.
     fn bus_time(&self, local: Nanos) -> Nanos {
         match local.checked_sub(self.pos.start_local) {
-            Some(d) if d < 1 << 30 => self.pos.start_bus + ((d * self.pos.inv_q32) >> 32),
+            Some(d) if d < 1 << 30 => self
+                .pos
+                .start_bus
+                .saturating_add((d * self.pos.inv_q32) >> 32),
             _ => self.clock.to_bus(local),
         }
     }
@@ -671,12 +805,16 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         false
     }
 
+    /// Stops loading the current HRT transfer if it is of topic `tx`; reports it missed
+    /// unless its last fragment's mailbox already owns the report. Out of line: only
+    /// failure paths call it, and it inlines the host's dispatch.
+    #[inline(never)]
     fn abandon_hrt(&mut self, tx: u8, host: &mut impl Host) {
         if let Some(x) = self.hrt.take() {
-            if x.tx == tx {
-                host.tx_done(x.tx, Some(x.token), TxOutcome::DeadlineMissed);
-            } else {
+            if x.tx != tx {
                 self.hrt = Some(x);
+            } else if !x.last_loaded {
+                host.tx_done(x.tx, Some(x.token), TxOutcome::DeadlineMissed);
             }
         }
     }
@@ -688,8 +826,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let count = fragment_count(topic.size as usize);
         if fragment + 1 == count {
             // First fragment: sample the latest value and latch it for the whole transfer.
+            // The previous transfer is done loading: missed if it never got its last
+            // fragment loaded, else its last mailbox reports it when it completes.
             if let Some(stale) = self.hrt.take() {
-                host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
+                if !stale.last_loaded {
+                    host.tx_done(stale.tx, Some(stale.token), TxOutcome::DeadlineMissed);
+                }
             }
             match host.hrt_sample(tx) {
                 Some(token) => {
@@ -697,7 +839,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         tx,
                         token,
                         crc: TxCrc::NEW,
-                    })
+                        seq: self.hrt_seq,
+                        last_loaded: false,
+                    });
+                    self.hrt_seq = self.hrt_seq.wrapping_add(1);
                 }
                 None => {
                     Counters::bump(&mut self.counters.hrt_empty);
@@ -711,7 +856,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         };
         let payload = host.payload(x.token);
         let crc = x.crc.advance(payload, fragment);
-        let token = x.token;
+        let (token, seq) = (x.token, x.seq);
         let mut data = [0u8; 8];
         let dlc = fragment_data(payload, crc, fragment, &mut data);
         let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else {
@@ -725,12 +870,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 tx,
                 token,
                 fragment,
+                seq,
+                broken: false,
             },
             &frame,
             can,
         ) {
             Counters::bump(&mut self.counters.hrt_late);
             self.abandon_hrt(tx, host);
+        } else if fragment == 0 {
+            if let Some(x) = self.hrt.as_mut() {
+                x.last_loaded = true;
+            }
         }
     }
 
@@ -918,9 +1069,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             Counters::bump(&mut self.counters.rx_unknown_id);
             return;
         };
+        // Exactly this topic's `wire_len` bytes, not the rest of the arena
+        // (`check_tables` rules out overlaps); a buffer outside the arena drops the frame.
         let start = topic.arena_offset as usize;
-        let Some(buf) = self.arena.get_mut(start..) else {
-            Counters::bump(&mut self.counters.rx_unknown_id);
+        let end = start + crate::fragment::wire_len(topic.size as usize);
+        let Some(buf) = self.arena.get_mut(start..end) else {
+            Counters::bump(&mut self.counters.rx_bad_size);
             return;
         };
         match state.step(buf, topic.size as usize, frame, sof) {
@@ -967,27 +1121,22 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if !was_synced || abs_cycle != self.pos.abs_cycle {
             // (Re)start the slot sequence at slot 1 of this cycle: first lock, or the sync
             // is not for the cycle this node is executing (its clock ran slow, or a jump).
-            let hyper = bus.hyperperiod_cycles.max(1) as u64;
-            let wrap = bus.cycle_counter_wrap.max(1) as u64;
-            self.pos.abs_cycle = abs_cycle;
-            self.pos.cycle_in_hyper = (abs_cycle % hyper) as u32;
-            self.pos.counter = (abs_cycle % wrap) as u32;
-            self.pos.next_slot = 1;
-            self.cursor = CalendarCursor::default();
+            self.enter_cycle(abs_cycle, 1);
         }
         // Refresh the cycle map from the slot clock (the only 64-bit divisions, once per
         // cycle): offset from this SOF, slot length from the estimated rate.
+        // No overflow: `abs_cycle` is a (saturated) bus time divided by `cycle_ns`.
         let start_bus = abs_cycle * cycle_ns;
         let start_local = self.clock.to_local(start_bus);
         let cycle_local = self
             .clock
-            .to_local(start_bus + cycle_ns)
+            .to_local(start_bus.saturating_add(cycle_ns))
             .saturating_sub(start_local)
             .max(1);
         self.pos.start_bus = start_bus;
         self.pos.start_local = start_local;
-        self.pos.slot_q16 = (cycle_local << 16) / bus.slots_per_cycle.max(1) as u64;
-        self.pos.inv_q32 = (cycle_ns << 32) / cycle_local;
+        self.pos.slot_q16 = ((cycle_local << 16) / bus.slots_per_cycle.max(1) as u64).max(1 << 16);
+        self.pos.inv_q32 = ratio_q32(cycle_ns, cycle_local);
         self.next_boundary = self.pos.boundary(self.pos.next_slot);
         if !was_synced && self.is_synced() {
             host.event(Event::Synced);
@@ -1018,19 +1167,43 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 tx,
                 token,
                 fragment,
-            } => match result {
-                // Reported only if the transfer is still the active one: an earlier
-                // fragment may have failed, and the transfer was then already reported
-                // (its remaining fragments are discarded by the receivers' CRC).
-                TxResult::Sent if fragment == 0 => {
-                    if self.hrt.is_some_and(|x| x.token == token && x.tx == tx) {
+                seq,
+                broken,
+            } => {
+                let current = self.hrt.filter(|x| x.seq == seq);
+                if fragment == 0 {
+                    // The last fragment's mailbox owns the report, whether or not the
+                    // transfer is still the current one (a retransmission may end after
+                    // the next transfer started, and the host may reuse the token).
+                    if current.is_some() {
                         self.hrt = None;
-                        host.tx_done(tx, Some(token), TxOutcome::Sent);
+                    }
+                    let outcome = if result == TxResult::Sent && !broken {
+                        TxOutcome::Sent
+                    } else {
+                        TxOutcome::DeadlineMissed
+                    };
+                    host.tx_done(tx, Some(token), outcome);
+                } else if result != TxResult::Sent {
+                    // An earlier fragment failed: receivers will drop the transfer.
+                    for mb in self.mailboxes.iter_mut() {
+                        if let Loaded::Hrt {
+                            seq: s,
+                            fragment: 0,
+                            broken,
+                            ..
+                        } = mb
+                        {
+                            if *s == seq {
+                                *broken = true;
+                            }
+                        }
+                    }
+                    if current.is_some() {
+                        self.abandon_hrt(tx, host);
                     }
                 }
-                TxResult::Sent => {}
-                _ => self.abandon_hrt(tx, host),
-            },
+            }
             Loaded::Window { item, key, .. } => {
                 self.in_flight = self.in_flight.saturating_sub(1);
                 match (item, result) {
@@ -1140,6 +1313,30 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 }
 
+/// `num · 2^32 / den` rounded down (`den` 0 counts as 1), saturating. One 64-bit
+/// division while `num < 2^32` (cycles up to 4.29 s); longer cycles take three, by
+/// 16-bit long division, exact for `den < 2^48` (78 hours; the model's longest cycle is
+/// 1000 s), so a 5 s cycle maps bus time exactly instead of overflowing `num << 32`.
+fn ratio_q32(num: u64, den: u64) -> u64 {
+    let mut den = den.max(1);
+    let mut num = num;
+    if num >> 32 == 0 {
+        return (num << 32) / den;
+    }
+    // Keep `den < 2^48` so the remainders below shift by 16 without overflow.
+    while den >> 48 != 0 {
+        den >>= 1;
+        num >>= 1;
+    }
+    let den = den.max(1);
+    let (q0, r0) = (num / den, num % den);
+    let (q1, r1) = ((r0 << 16) / den, (r0 << 16) % den);
+    let q2 = (r1 << 16) / den;
+    (q0.saturating_mul(1 << 32))
+        .saturating_add(q1 << 16)
+        .saturating_add(q2)
+}
+
 /// DLC of the next frame of a queued item.
 fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
     match *item {
@@ -1151,5 +1348,27 @@ fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
             let index = count.checked_sub(fragment as usize + 1)?;
             Some(wire.saturating_sub(index * 8).min(8) as u8)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ratio_q32;
+
+    #[test]
+    fn ratio_q32_is_exact_on_both_paths() {
+        let exact = |n: u64, d: u64| ((u128::from(n) << 32) / u128::from(d)) as u64;
+        for (n, d) in [
+            (10_000_000, 10_000_123),
+            (4_294_967_295, 4_294_000_000),
+            (5_000_000_000, 4_999_000_001),
+            (5_000_000_000, 5_004_000_000),
+            (1_000_000_000_000, 1_000_300_000_017),
+            (1 << 47, (1 << 47) - 1),
+        ] {
+            assert_eq!(ratio_q32(n, d), exact(n, d), "{n}/{d}");
+        }
+        assert_eq!(ratio_q32(5, 0), 5 << 32);
+        assert_eq!(ratio_q32(u64::MAX, 1), u64::MAX);
     }
 }

@@ -667,6 +667,118 @@ fn tables_that_do_not_fit_the_engine_are_rejected() {
     const _: () = assert!(check_tables(&EMPTY, 0, 0).is_ok());
 }
 
+/// Receive tables with the given (msg_id, size, arena_offset) rows.
+fn rx_table(rows: &[(u16, u16, u16)]) -> &'static [RxTopic] {
+    let v: Vec<RxTopic> = rows
+        .iter()
+        .map(|&(id, size, arena_offset)| RxTopic {
+            msg_id: MsgId(id),
+            size,
+            arena_offset,
+        })
+        .collect();
+    Box::leak(v.into_boxed_slice())
+}
+
+#[test]
+fn overlapping_and_out_of_range_receive_buffers_are_rejected() {
+    use rtcan_core::engine::{check_tables, TablesError};
+    let p = paper(3);
+    let base = p.tables[1];
+    let with_rx = |rows: &[(u16, u16, u16)]| NodeTables {
+        rx: rx_table(rows),
+        ..base
+    };
+    // 20-byte topic: 22 wire bytes (payload + transfer CRC), then an 8-byte topic.
+    let good = with_rx(&[(0x140, 20, 0), (0x141, 8, 22)]);
+    assert_eq!(check_tables(&good, 16, 30), Ok(()));
+    // The rtcan-paper sim's bug: laid out with `size`, so the CRC (bytes 20..22) of the
+    // first topic lands in the second topic's buffer.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 20, 0), (0x141, 8, 20)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    // Same start, and a buffer inside another one.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 8, 0), (0x141, 8, 0)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 20, 0), (0x141, 2, 10)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    // Laid out against table order: rejected too (the check is linear).
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 8, 8), (0x141, 8, 0)]), 16, 30),
+        Err(TablesError::RxOverlap)
+    );
+    // Past the end: the arena must hold wire_len (22), not size (20), for the last topic.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 30),
+        Ok(())
+    );
+    assert_eq!(
+        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 29),
+        Err(TablesError::ArenaTooSmall)
+    );
+    assert_eq!(
+        check_tables(&with_rx(&[(0x141, 8, u16::MAX)]), 16, 512),
+        Err(TablesError::ArenaTooSmall)
+    );
+    // A topic no transfer can carry (1023 bytes > MAX_PAYLOAD), receive or transmit.
+    assert_eq!(
+        check_tables(&with_rx(&[(0x140, 1023, 0)]), 16, 4096),
+        Err(TablesError::BadSize)
+    );
+    let big_tx: &'static [TxTopic] = Box::leak(Box::new([TxTopic {
+        msg_id: MsgId(0x150),
+        class: Class::Srt,
+        size: 1023,
+        deadline_ns: 1,
+    }]));
+    let t = NodeTables {
+        tx: big_tx,
+        calendar: &[],
+        ..base
+    };
+    assert_eq!(check_tables(&t, 16, 512), Err(TablesError::BadSize));
+    assert!(TestEngine::try_new(with_rx(&[(0x140, 8, 0), (0x141, 8, 4)]), 0).is_err());
+    assert!(TestEngine::try_new(good, 0).is_ok());
+}
+
+#[test]
+fn calendar_entries_outside_the_topic_or_hyperperiod_are_rejected() {
+    use rtcan_core::engine::{check_tables, TablesError};
+    let p = paper(3);
+    let base = p.tables[0];
+    assert_eq!(check_tables(&base, 16, 512), Ok(()));
+    let cal = |slot: u32, tx: u8, fragment: u8| NodeTables {
+        calendar: Box::leak(Box::new([CalEntry { slot, tx, fragment }])),
+        ..base
+    };
+    // H_A (tx 0) is one 8-byte frame: fragment 0 only. S (tx 3) is 3 fragments.
+    assert_eq!(check_tables(&cal(5, 0, 0), 16, 512), Ok(()));
+    assert_eq!(
+        check_tables(&cal(5, 0, 1), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+    assert_eq!(check_tables(&cal(5, 3, 2), 16, 512), Ok(()));
+    assert_eq!(
+        check_tables(&cal(5, 3, 3), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+    // One hyperperiod of one 60-slot cycle: slots 0..=59.
+    assert_eq!(check_tables(&cal(59, 0, 0), 16, 512), Ok(()));
+    assert_eq!(
+        check_tables(&cal(60, 0, 0), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+    assert_eq!(
+        check_tables(&cal(5, 5, 0), 16, 512),
+        Err(TablesError::BadCalendar)
+    );
+}
+
 #[test]
 fn backup_master_takes_over_when_the_master_dies() {
     let (mut bus, p) = paper_bus(3);
@@ -749,4 +861,191 @@ fn backup_master_takes_over_when_the_master_dies() {
             }
         }
     }
+}
+
+/// Master sends a 10-byte HRT topic (12 wire bytes: fragments 1 and 0) twice per cycle,
+/// back to back: transfer A in slots 10, 11 and transfer B in slots 12, 13. A slave
+/// receives it.
+fn back_to_back_hrt(reuse_tokens: bool) -> Bus {
+    let (master, slave) = back_to_back_tables();
+    let mut b = Bus::new(1_000_000);
+    b.add(master, 0.0, 0.0);
+    b.add(slave, 300.0, 5_000.0);
+    b.nodes[0].host.hrt = vec![Some((0..10).collect())];
+    b.nodes[0].host.reuse_hrt_tokens = reuse_tokens;
+    b
+}
+
+/// Tables of `back_to_back_hrt`: (master, slave).
+fn back_to_back_tables() -> (NodeTables<'static>, NodeTables<'static>) {
+    let size = 10u16;
+    let id = MsgId(0x0150);
+    let tx: &'static [TxTopic] = Box::leak(Box::new([TxTopic {
+        msg_id: id,
+        class: Class::Hrt,
+        size,
+        deadline_ns: 0,
+    }]));
+    let cal: &'static [CalEntry] = Box::leak(Box::new([(10, 1), (11, 0), (12, 1), (13, 0)].map(
+        |(slot, fragment)| CalEntry {
+            slot,
+            tx: 0,
+            fragment,
+        },
+    )));
+    let rx: &'static [RxTopic] = Box::leak(Box::new([RxTopic {
+        msg_id: id,
+        size,
+        arena_offset: 0,
+    }]));
+    let masks: &'static [u64] = Box::leak(Box::new([1u64 | 0b1111 << 10]));
+    let master = NodeTables {
+        bus: bus(),
+        module: 0,
+        tx,
+        rx: &[],
+        calendar: cal,
+        master_masks: masks,
+    };
+    let slave = NodeTables {
+        bus: bus(),
+        module: 1,
+        tx: &[],
+        rx,
+        calendar: &[],
+        master_masks: &[],
+    };
+    (master, slave)
+}
+
+/// A's last fragment is destroyed by an error frame in cycle 4 and retransmitted; the
+/// retransmission is still on the wire when slot 12 loads B's first fragment.
+fn hrt_last_fragment_retransmitted_into_the_next_transfer(reuse_tokens: bool) {
+    let mut b = back_to_back_hrt(reuse_tokens);
+    let last = CanId::new(0, MsgId(0x0150), 0).unwrap().raw();
+    let slot11 = T0 + (4 * 60 + 11) * SLOT_NS;
+    b.destroy.push((slot11, last));
+    let cycles = 8;
+    b.run(T0 + cycles * 60 * SLOT_NS);
+    assert_eq!(b.destroyed.len(), 1);
+    let retx = b
+        .log
+        .iter()
+        .find(|w| w.sof > slot11 && w.frame.id().raw() == last)
+        .unwrap();
+    assert!(
+        retx.end > slot11 + SLOT_NS,
+        "the retransmission ends in slot 12 ({} > {})",
+        retx.end,
+        slot11 + SLOT_NS
+    );
+    // Every transfer was delivered once, and reported once: Sent, none missed.
+    let transfers = 2 * cycles as usize;
+    let done = &b.nodes[0].host.done;
+    assert_eq!(
+        done.iter()
+            .filter(|d| d.2 == TxOutcome::DeadlineMissed)
+            .count(),
+        0,
+        "{done:?}"
+    );
+    assert_eq!(
+        done.iter().filter(|d| d.2 == TxOutcome::Sent).count(),
+        transfers
+    );
+    assert_eq!(b.nodes[1].host.delivered.len(), transfers);
+    assert_eq!(b.nodes[1].engine.counters().rx_incomplete, 0);
+    assert_eq!(b.nodes[0].engine.counters().deadline_missed, 0);
+    // Every transfer's last fragment went on the wire.
+    let lasts: Vec<_> = b
+        .log
+        .iter()
+        .filter(|w| w.frame.id().raw() == last)
+        .collect();
+    assert_eq!(lasts.len(), transfers);
+}
+
+#[test]
+fn hrt_transfer_whose_last_fragment_overruns_is_reported_sent() {
+    hrt_last_fragment_retransmitted_into_the_next_transfer(false);
+}
+
+#[test]
+fn hrt_token_reused_while_the_last_fragment_retransmits_is_not_reported_early() {
+    hrt_last_fragment_retransmitted_into_the_next_transfer(true);
+}
+
+#[test]
+fn hrt_transfer_with_a_failed_earlier_fragment_is_reported_missed_once() {
+    // Both fragments of transfer A pending at once (slot 10, then 11, never sent); the
+    // first is aborted, then the last one goes out: receivers drop A (fragment 1
+    // missing), so A is missed, reported once, by the last fragment's completion.
+    let (tables, _) = back_to_back_tables();
+    let mut e = TestEngine::new(tables, 0);
+    let (mut can, mut host) = (TestCan::default(), TestHost::default());
+    host.hrt = vec![Some((0..10).collect())];
+    let slot = |k: u64| SLOT_NS + k * SLOT_NS;
+    e.poll(slot(10), &mut can, &mut host);
+    e.poll(slot(11), &mut can, &mut host);
+    let mb = |can: &TestCan, fragment: u8| {
+        can.mailboxes
+            .iter()
+            .position(|m| m.is_some_and(|f| f.id().fragment() == fragment && !f.id().is_sync()))
+            .unwrap()
+    };
+    let (m1, m0) = (mb(&can, 1), mb(&can, 0));
+    use rtcan_core::driver::{Mailbox, TxResult};
+    can.mailboxes[m1] = None;
+    e.on_tx_done(
+        Mailbox(m1 as u8),
+        TxResult::Aborted,
+        slot(11) + 10,
+        &mut can,
+        &mut host,
+    );
+    assert!(
+        host.done.is_empty(),
+        "the last fragment's mailbox owns the report"
+    );
+    can.mailboxes[m0] = None;
+    e.on_tx_done(
+        Mailbox(m0 as u8),
+        TxResult::Sent,
+        slot(11) + 20,
+        &mut can,
+        &mut host,
+    );
+    assert_eq!(
+        host.done,
+        vec![(
+            0,
+            Some(rtcan_core::driver::Token(0)),
+            TxOutcome::DeadlineMissed
+        )]
+    );
+    // The next transfer (slots 12, 13) is unaffected.
+    e.poll(slot(12), &mut can, &mut host);
+    let m = mb(&can, 1);
+    can.mailboxes[m] = None;
+    e.on_tx_done(
+        Mailbox(m as u8),
+        TxResult::Sent,
+        slot(12) + 10,
+        &mut can,
+        &mut host,
+    );
+    e.poll(slot(13), &mut can, &mut host);
+    let m = mb(&can, 0);
+    can.mailboxes[m] = None;
+    e.on_tx_done(
+        Mailbox(m as u8),
+        TxResult::Sent,
+        slot(13) + 10,
+        &mut can,
+        &mut host,
+    );
+    assert_eq!(
+        host.done[1..],
+        [(0, Some(rtcan_core::driver::Token(1)), TxOutcome::Sent)]
+    );
 }

@@ -6,7 +6,7 @@
 )]
 //! Random event sequences into one engine (slave and master): arbitrary frames, bogus
 //! TX completions for any mailbox, submits of any topic with any payload length, time
-//! jumping forwards and backwards. The engine must never panic, never load a busy
+//! jumping forwards (up to the end of `u64` time) and backwards. The engine must never panic, never load a busy
 //! mailbox (TestCan asserts it), and every message handed to it must come back to the
 //! host exactly once (sent, missed) or still be queued/in flight.
 mod common;
@@ -84,10 +84,25 @@ const MASKS: [u64; 2] = [0b11101, 0b11101];
 enum Ev {
     Advance(u32),
     Back(u32),
-    Rx { raw: u32, data: Vec<u8> },
-    Sync { cycle: u16, mask: u64, dlc: u8 },
-    TxDone { mb: u8, result: u8 },
-    Submit { tx: u8, len: usize },
+    /// A forward clock jump of any size (saturating at u64::MAX).
+    Jump(u64),
+    Rx {
+        raw: u32,
+        data: Vec<u8>,
+    },
+    Sync {
+        cycle: u16,
+        mask: u64,
+        dlc: u8,
+    },
+    TxDone {
+        mb: u8,
+        result: u8,
+    },
+    Submit {
+        tx: u8,
+        len: usize,
+    },
     Overrun,
 }
 
@@ -95,6 +110,7 @@ fn ev() -> impl Strategy<Value = Ev> {
     prop_oneof![
         (0u32..600_000).prop_map(Ev::Advance),
         (0u32..50_000).prop_map(Ev::Back),
+        prop_oneof![any::<u64>(), 0u64..100_000_000_000].prop_map(Ev::Jump),
         (any::<u32>(), proptest::collection::vec(any::<u8>(), 0..=8)).prop_map(|(raw, data)| {
             Ev::Rx {
                 raw: raw & CanId::MAX_RAW,
@@ -136,7 +152,11 @@ fn run(master: bool, events: Vec<Ev>) {
     for ev in events {
         match ev {
             Ev::Advance(d) => {
-                now += u64::from(d);
+                now = now.saturating_add(u64::from(d));
+                e.poll(now, &mut can, &mut host);
+            }
+            Ev::Jump(d) => {
+                now = now.saturating_add(d);
                 e.poll(now, &mut can, &mut host);
             }
             Ev::Back(d) => {

@@ -3,8 +3,10 @@
 //! Publisher classes (R2P §3.4.5) follow the topic's [`Remote`](crate::Remote):
 //! HRT latches the latest value for the engine's slot and raises a flag when a slot
 //! found nothing; SRT queues for `Engine::submit` and raises a flag on a deadline miss;
-//! NRT applies back-pressure (`publish` returns [`WouldBlock`], `publish_wait().await`
-//! waits for room). Local subscribers never block any class.
+//! SRT and NRT refuse while the queue towards the engine is full (`publish` hands the
+//! loan back in [`WouldBlock`], `send` says [`SendError::QueueFull`] for SRT and
+//! [`SendError::WouldBlock`] for NRT; `publish_wait().await` waits for room). Local
+//! subscribers never block any class.
 use core::future::Future;
 use core::pin::Pin;
 use core::task::{Context, Poll};
@@ -20,7 +22,8 @@ use crate::topic::{Remote, Topic, TopicStats};
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PoolExhausted;
 
-/// An NRT topic's engine queue is full: the message is handed back, not dropped.
+/// An SRT or NRT topic's queue towards the engine is full: the message is handed back,
+/// not dropped (and not published to the local subscribers either).
 #[derive(Debug)]
 pub struct WouldBlock<L>(pub L);
 
@@ -32,6 +35,11 @@ pub enum SendError {
     PoolExhausted,
     /// NRT back-pressure (the block was released).
     WouldBlock,
+    /// SRT: the queue towards the engine is full, the message was not published (the
+    /// block was released; counted in `TopicStats::remote_overflows`). Messages
+    /// published earlier are still waiting for the engine: publish less often, size
+    /// the queue deeper, or wait (`publish_wait`).
+    QueueFull,
 }
 
 /// Handle for the node that publishes on a topic (one per topic).
@@ -60,7 +68,8 @@ impl<'a, T: Message, const N: usize, const S: usize, const Q: usize> Publisher<'
     }
 
     /// Publishes `loan` stamped `now`: queued to every local subscriber, latched for
-    /// the HRT slot or queued for the engine. Only NRT topics refuse (full engine queue).
+    /// the HRT slot or queued for the engine. SRT and NRT topics refuse while their
+    /// queue towards the engine is full, handing the loan back.
     #[inline]
     pub fn publish(
         &self,
@@ -86,7 +95,11 @@ impl<'a, T: Message, const N: usize, const S: usize, const Q: usize> Publisher<'
             };
         }
         let loan = self.alloc(value).map_err(|_| SendError::PoolExhausted)?;
-        self.publish(loan, now).map_err(|_| SendError::WouldBlock)
+        self.publish(loan, now)
+            .map_err(|_| match self.topic.remote() {
+                Remote::Srt => SendError::QueueFull,
+                _ => SendError::WouldBlock,
+            })
     }
 
     /// Waits for a free block (NRT publishers that must not drop).
@@ -97,7 +110,7 @@ impl<'a, T: Message, const N: usize, const S: usize, const Q: usize> Publisher<'
         }
     }
 
-    /// Publishes, waiting while an NRT topic's engine queue is full.
+    /// Publishes, waiting while an SRT or NRT topic's queue towards the engine is full.
     pub fn publish_wait(
         &self,
         loan: Loan<'a, T, N, S, Q>,

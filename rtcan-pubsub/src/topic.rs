@@ -10,6 +10,12 @@
 //! `critical_section::Mutex`. A block's value is written only while its single owner
 //! (the publisher's `Loan`) holds it, and read only while a handle holds a reference,
 //! so the `UnsafeCell` contents are never written and read at the same time.
+//!
+//! Wake-ups: a waker is never called inside the critical section. Code inside it only
+//! marks the waker due; `Topic::with` sees the mark as the section ends, takes the due
+//! wakers out (in a section of their own) and calls them after it, so a `wake()` that
+//! runs its task at once (and publishes, receives or drops a handle on this very topic)
+//! finds the state free.
 use core::cell::{RefCell, UnsafeCell};
 use core::mem::MaybeUninit;
 use core::task::Waker;
@@ -33,7 +39,8 @@ pub enum Remote {
     None,
     /// Sampled at this module's reserved slots: the latest value is latched.
     Hrt,
-    /// Sent by deadline (EDF): queued for the engine, misses are reported.
+    /// Sent by deadline (EDF): queued for the engine, misses are reported; `publish`
+    /// refuses (the caller is told) while the queue towards the engine is full.
     Srt,
     /// Best effort with back-pressure: `publish` refuses while the engine queue is full.
     Nrt,
@@ -47,7 +54,8 @@ pub struct TopicStats {
     pub published: u32,
     /// `alloc` found no free block.
     pub pool_exhausted: u32,
-    /// SRT messages not handed to the engine because its queue for this topic was full.
+    /// SRT publishes refused because the queue towards the engine was full (the
+    /// publisher got `SendError::QueueFull` / the loan back).
     pub remote_overflows: u32,
     /// HRT values replaced by a newer one before their slot came.
     pub hrt_replaced: u32,
@@ -76,6 +84,10 @@ struct PoolState<const N: usize> {
     refs: [u8; N],
     stamps: [Nanos; N],
     waker: Option<Waker>,
+    /// The publisher's waker is to be called once the critical section ends.
+    publisher_due: bool,
+    /// Some waker (publisher's or a subscriber's) is due: checked once per section.
+    wake_due: bool,
 }
 
 impl<const N: usize> PoolState<N> {
@@ -127,9 +139,11 @@ impl<const N: usize> PoolState<N> {
         self.wake_publisher();
     }
 
+    /// Marks the publisher's waker due (called after the critical section, see module doc).
     fn wake_publisher(&mut self) {
-        if let Some(w) = self.waker.take() {
-            w.wake();
+        if self.waker.is_some() {
+            self.publisher_due = true;
+            self.wake_due = true;
         }
     }
 
@@ -147,6 +161,8 @@ struct SubState<const Q: usize> {
     ring: Ring<Q>,
     overflows: u32,
     waker: Option<Waker>,
+    /// `waker` is to be called once the critical section ends (a publish came).
+    due: bool,
     last_rx: Option<Nanos>,
 }
 
@@ -155,6 +171,7 @@ impl<const Q: usize> SubState<Q> {
         ring: Ring::EMPTY,
         overflows: 0,
         waker: None,
+        due: false,
         last_rx: None,
     };
 }
@@ -176,6 +193,27 @@ struct State<const N: usize, const S: usize, const Q: usize> {
     subs: [SubState<Q>; S],
     remote: RemoteState<Q>,
     stats: TopicStats,
+}
+
+impl<const N: usize, const S: usize, const Q: usize> State<N, S, Q> {
+    /// Takes one due waker out (inside the critical section); clears the mark when none
+    /// is left.
+    fn take_one_due(&mut self) -> Option<Waker> {
+        if core::mem::take(&mut self.pool.publisher_due) {
+            if let Some(w) = self.pool.waker.take() {
+                return Some(w);
+            }
+        }
+        for sub in self.subs.iter_mut() {
+            if core::mem::take(&mut sub.due) {
+                if let Some(w) = sub.waker.take() {
+                    return Some(w);
+                }
+            }
+        }
+        self.pool.wake_due = false;
+        None
+    }
 }
 
 /// A topic of message type `T` with `N` pool blocks, `S` local subscribers (slots
@@ -200,7 +238,10 @@ unsafe impl<T: Message, const N: usize, const S: usize, const Q: usize> Sync for
 /// queued message of each subscriber (`subscribers * queue`), one held by each
 /// subscriber while it processes (`subscribers`), the engine's share (`remote`: 2 for
 /// HRT = latched + on air, queue depth + 1 for SRT/NRT, 0 if local), and the
-/// publisher's loans (`loans`, usually 1).
+/// publisher's loans (`loans`, usually 1). HRT: a last fragment still retransmitting
+/// when the next transfer starts keeps its block until it completes (the engine reports
+/// each transfer once, when it is really over); a publish in that moment can find the
+/// pool one block short (`PoolExhausted`, counted) unless `remote` is 3.
 pub const fn pool_blocks(subscribers: usize, queue: usize, remote: usize, loans: usize) -> usize {
     subscribers * queue + subscribers + remote + loans
 }
@@ -238,6 +279,8 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     refs: [0; N],
                     stamps: [0; N],
                     waker: None,
+                    publisher_due: false,
+                    wake_due: false,
                 },
                 subs: [const { SubState::EMPTY }; S],
                 remote: RemoteState {
@@ -273,7 +316,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
 
     /// Counters.
     pub fn stats(&self) -> TopicStats {
-        self.with(|st| st.stats)
+        self.with_quiet(|st| st.stats)
     }
 
     /// Free pool blocks now.
@@ -306,17 +349,49 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                 miss_flag: false,
             };
             st.pool.waker = None;
+            st.pool.publisher_due = false;
+            st.pool.wake_due = false;
             st.stats = TopicStats::default();
         });
     }
 
     pub fn free_blocks(&self) -> usize {
-        self.with(|st| st.pool.free_count())
+        self.with_quiet(|st| st.pool.free_count())
     }
 
+    /// Runs `f` on the state in a critical section, then calls the wakers `f` made due,
+    /// outside of it (a waker may re-enter this topic). The common path only reads a flag.
     #[inline(always)]
     fn with<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
+        let (r, due) = critical_section::with(|cs| {
+            let mut st = self.state.borrow_ref_mut(cs);
+            let r = f(&mut st);
+            (r, st.pool.wake_due)
+        });
+        if due {
+            self.wake_due();
+        }
+        r
+    }
+
+    /// `with` for sections that free no block and queue nothing (reads, alloc, pop,
+    /// flags), so they make no waker due: no flag to check on the way out.
+    #[inline(always)]
+    fn with_quiet<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
         critical_section::with(|cs| f(&mut self.state.borrow_ref_mut(cs)))
+    }
+
+    /// Takes the due wakers out one by one, each in a critical section of its own, and
+    /// calls each after its section (whoever takes one calls it: none is lost or called
+    /// twice).
+    #[cold]
+    #[inline(never)]
+    fn wake_due(&self) {
+        while let Some(w) =
+            critical_section::with(|cs| self.state.borrow_ref_mut(cs).take_one_due())
+        {
+            w.wake();
+        }
     }
 
     /// The value cell of block `idx`.
@@ -331,7 +406,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// Takes a free block (refcount 1, owned by the caller) and writes `value` into it.
     #[inline(always)]
     pub(crate) fn alloc_idx(&self, value: T, waker: Option<&Waker>) -> Option<u8> {
-        let idx = self.with(|st| match st.pool.alloc() {
+        let idx = self.with_quiet(|st| match st.pool.alloc() {
             Some(i) => Some(i),
             None => {
                 bump(&mut st.stats.pool_exhausted);
@@ -353,7 +428,8 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     }
 
     /// Publishes the owned block `idx`, stamped `now`. Returns `false` (and does nothing,
-    /// after registering `waker`) when an NRT topic's engine queue is full.
+    /// after registering `waker`) when an SRT or NRT topic's queue towards the engine is
+    /// full: the message is neither sent nor half-published to the local subscribers.
     #[inline(always)]
     pub(crate) fn publish_idx(&self, idx: u8, now: Nanos, waker: Option<&Waker>) -> bool {
         if self.remote != Remote::None {
@@ -367,7 +443,10 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         }
         let mut kick = false;
         let accepted = self.with(|st| {
-            if self.remote == Remote::Nrt && st.remote.pending.is_full() {
+            if matches!(self.remote, Remote::Srt | Remote::Nrt) && st.remote.pending.is_full() {
+                if self.remote == Remote::Srt {
+                    bump(&mut st.stats.remote_overflows);
+                }
                 if let Some(w) = waker {
                     register(&mut st.pool.waker, w);
                 }
@@ -387,12 +466,11 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     }
                 }
                 Remote::Srt | Remote::Nrt => {
+                    // Room was checked above, in this critical section.
                     if st.remote.pending.push(idx) {
                         refs += 1;
                         st.remote.held |= bit(idx);
                         kick = true;
-                    } else {
-                        bump(&mut st.stats.remote_overflows);
                     }
                 }
             }
@@ -431,7 +509,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// Pops subscriber `id`'s oldest message: (block, stamp).
     #[inline(always)]
     pub(crate) fn pop(&self, id: u8, waker: Option<&Waker>) -> Option<(u8, Nanos)> {
-        self.with(|st| {
+        self.with_quiet(|st| {
             let sub = st.subs.get_mut(usize::from(id))?;
             match sub.ring.pop() {
                 Some(idx) => {
@@ -467,32 +545,32 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     }
 
     pub(crate) fn last_rx(&self, id: u8) -> Option<Nanos> {
-        self.with(|st| st.subs.get(usize::from(id)).and_then(|s| s.last_rx))
+        self.with_quiet(|st| st.subs.get(usize::from(id)).and_then(|s| s.last_rx))
     }
 
     pub(crate) fn overflows(&self, id: u8) -> u32 {
-        self.with(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.overflows))
+        self.with_quiet(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.overflows))
     }
 
     pub(crate) fn queued(&self, id: u8) -> usize {
-        self.with(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.ring.len()))
+        self.with_quiet(|st| st.subs.get(usize::from(id)).map_or(0, |s| s.ring.len()))
     }
 
     // ---- publisher flags --------------------------------------------------
 
     pub(crate) fn take_nothing_flag(&self) -> bool {
-        self.with(|st| core::mem::take(&mut st.remote.nothing_flag))
+        self.with_quiet(|st| core::mem::take(&mut st.remote.nothing_flag))
     }
 
     pub(crate) fn take_miss_flag(&self) -> bool {
-        self.with(|st| core::mem::take(&mut st.remote.miss_flag))
+        self.with_quiet(|st| core::mem::take(&mut st.remote.miss_flag))
     }
 
     // ---- engine side (used by the ports) ------------------------------------
 
     /// HRT slot: hands the latched block to the engine (its reference moves along).
     pub(crate) fn hrt_take(&self) -> Option<Token> {
-        self.with(|st| {
+        self.with_quiet(|st| {
             let idx = core::mem::replace(&mut st.remote.latest, NONE);
             if idx == NONE {
                 // Counted here, where it is known; the `NothingToSend` outcome that
@@ -528,7 +606,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
 
     /// Oldest block waiting for `Engine::submit`.
     pub(crate) fn pending_peek(&self) -> Option<Token> {
-        self.with(|st| st.remote.pending.peek().map(|i| Token(u16::from(i))))
+        self.with_quiet(|st| st.remote.pending.peek().map(|i| Token(u16::from(i))))
     }
 
     /// Removes `token` from the head of the engine queue: its reference moves to the
@@ -559,7 +637,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         let Some(cell) = self.wire.get(usize::from(idx)) else {
             return &[];
         };
-        if !self.with(|st| st.remote.held & bit(idx) != 0) {
+        if !self.with_quiet(|st| st.remote.held & bit(idx) != 0) {
             return &[];
         }
         // SAFETY: the bus side holds a reference to the block, so nobody writes it.
@@ -570,19 +648,19 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// subscribers, stamped with the start-of-frame time.
     pub(crate) fn deliver_bytes(&self, bytes: &[u8], sof: Nanos) {
         let Some(value) = T::decode(bytes) else {
-            self.with(|st| bump(&mut st.stats.rx_decode_errors));
+            self.with_quiet(|st| bump(&mut st.stats.rx_decode_errors));
             return;
         };
         match self.alloc_idx(value, None) {
             Some(idx) => {
                 if !self.publish_idx(idx, sof, None) {
-                    // Only an NRT topic refuses; a module does not both send and
-                    // receive one topic, but the block must not leak if it does.
+                    // Only an SRT/NRT topic sent by this module refuses; a module does
+                    // not both send and receive one topic, but the block must not leak.
                     self.release(idx);
-                    self.with(|st| bump(&mut st.stats.rx_dropped));
+                    self.with_quiet(|st| bump(&mut st.stats.rx_dropped));
                 }
             }
-            None => self.with(|st| bump(&mut st.stats.rx_dropped)),
+            None => self.with_quiet(|st| bump(&mut st.stats.rx_dropped)),
         }
     }
 }
@@ -611,8 +689,10 @@ fn fan_out<const N: usize, const S: usize, const Q: usize>(
         if sub.ring.push(idx) {
             refs += 1;
         }
-        if let Some(w) = sub.waker.take() {
-            w.wake();
+        if sub.waker.is_some() {
+            // Taken and called by `Topic::with` once the critical section ends.
+            sub.due = true;
+            st.pool.wake_due = true;
         }
     }
     // Wrapping: a rate counter, read as differences (saturating costs the hot path).

@@ -248,15 +248,34 @@ fn srt_deadline_miss_is_signalled_and_the_block_released() {
 }
 
 #[test]
-fn srt_full_engine_queue_drops_for_the_bus_only_and_counts() {
+fn srt_full_engine_queue_is_reported_to_the_caller() {
     let t = Topic::<u16, 8, 1, 1>::new(Remote::Srt, None);
     let p = t.publisher();
-    p.send(1, 0).unwrap();
-    p.send(2, 0).unwrap(); // engine queue (depth 1) full: local subscriber still gets it
-    assert_eq!(t.stats().remote_overflows, 1);
     let sub = t.subscriber::<0>();
-    assert_eq!(sub.overflows(), 1); // queue length 1: the local one overflowed too
-    assert_eq!(*sub.try_recv().unwrap(), 2);
+    p.send(1, 0).unwrap();
+    // The queue towards the engine (depth 1) is full: the caller is told, nothing is
+    // half-published (the local subscriber does not get it either), the block returns.
+    assert_eq!(p.send(2, 0), Err(SendError::QueueFull));
+    let loan = p.alloc(3).unwrap();
+    let loan = p.publish(loan, 0).unwrap_err().0;
+    assert_eq!(*loan, 3, "handed back, not dropped");
+    drop(loan);
+    assert_eq!(t.stats().remote_overflows, 2);
+    assert_eq!(t.stats().published, 1);
+    assert_eq!(sub.overflows(), 0);
+    assert_eq!(*sub.try_recv().unwrap(), 1);
+    assert_eq!(sub.try_recv().map(|m| *m), None);
+    assert_eq!(t.free_blocks(), 7, "one block waits for the engine");
+    // The engine takes the queued one: room again, and a waiting publisher is woken.
+    let (count, waker) = counting_waker();
+    let mut fut = p.publish_wait(p.alloc(4).unwrap(), 1);
+    assert!(poll_once(&mut fut, &waker).is_pending());
+    let tok = t.pending().unwrap();
+    t.pending_done(tok, true);
+    assert_eq!(wakes(&count), 1);
+    assert!(poll_once(&mut fut, &waker).is_ready());
+    assert_eq!(*sub.try_recv().unwrap(), 4);
+    assert_eq!(p.send(5, 2), Err(SendError::QueueFull));
 }
 
 #[test]
@@ -268,7 +287,8 @@ fn kick_runs_when_a_message_is_queued_for_the_engine() {
     }
     let t = Topic::<u8, 4, 0, 1>::new(Remote::Srt, Some(kick));
     t.publisher().send(1, 0).unwrap();
-    t.publisher().send(2, 0).unwrap(); // overflow: nothing new for the engine
+    // Queue full: refused, nothing new for the engine.
+    assert_eq!(t.publisher().send(2, 0), Err(SendError::QueueFull));
     assert_eq!(KICKS.load(Ordering::SeqCst), 1);
 }
 
@@ -390,4 +410,87 @@ fn reset_returns_every_topic_held_block_but_not_live_handles() {
     assert_eq!(t.free_blocks(), 7);
     drop(held);
     assert_eq!(t.free_blocks(), 8);
+}
+
+/// A waker whose `wake()` publishes on the topic it waits on (a task woken inline by an
+/// executor that runs it at once). Publishes once, so a wake-up cannot recurse forever.
+struct PublishingWaker {
+    topic: &'static Topic<u32, 8, 1, 4>,
+    value: u32,
+    calls: std::sync::atomic::AtomicUsize,
+}
+
+impl std::task::Wake for PublishingWaker {
+    fn wake(self: std::sync::Arc<Self>) {
+        self.wake_by_ref();
+    }
+    fn wake_by_ref(self: &std::sync::Arc<Self>) {
+        use std::sync::atomic::Ordering;
+        if self.calls.fetch_add(1, Ordering::SeqCst) == 0 {
+            self.topic.publisher().send(self.value, 7).unwrap();
+        }
+    }
+}
+
+fn publishing_waker(
+    topic: &'static Topic<u32, 8, 1, 4>,
+    value: u32,
+) -> (std::sync::Arc<PublishingWaker>, std::task::Waker) {
+    let w = std::sync::Arc::new(PublishingWaker {
+        topic,
+        value,
+        calls: std::sync::atomic::AtomicUsize::new(0),
+    });
+    (w.clone(), std::task::Waker::from(w))
+}
+
+#[test]
+fn subscriber_waker_that_publishes_to_the_same_topic_does_not_panic() {
+    static T: Topic<u32, 8, 1, 4> = Topic::new(Remote::None, None);
+    let sub = T.subscriber::<0>();
+    let (w, waker) = publishing_waker(&T, 2);
+    let mut fut = sub.recv();
+    assert!(poll_once(&mut fut, &waker).is_pending());
+    T.publisher().send(1, 5).unwrap();
+    assert_eq!(w.calls.load(std::sync::atomic::Ordering::SeqCst), 1);
+    // Both messages queued, in order: the one that woke, then the one the wake sent.
+    let got: Vec<(u32, u64)> =
+        std::iter::from_fn(|| sub.try_recv().map(|m| (*m, m.stamp()))).collect();
+    assert_eq!(got, vec![(1, 5), (2, 7)]);
+    assert_eq!(T.free_blocks(), 8);
+}
+
+#[test]
+fn publisher_waker_that_publishes_when_a_block_returns_does_not_panic() {
+    static T: Topic<u32, 8, 1, 4> = Topic::new(Remote::None, None);
+    let p = T.publisher();
+    let loans: Vec<_> = (0..8).map(|i| p.alloc(i).unwrap()).collect();
+    let (w, waker) = publishing_waker(&T, 42);
+    let mut fut = p.alloc_wait(9);
+    assert!(poll_once(&mut fut, &waker).is_pending());
+    // Returning a block wakes the publisher, whose wake publishes into that block.
+    drop(loans);
+    assert_eq!(w.calls.load(std::sync::atomic::Ordering::SeqCst), 1);
+    let sub = T.subscriber::<0>();
+    assert_eq!(sub.try_recv().map(|m| *m), Some(42));
+    assert_eq!(T.free_blocks(), 8);
+}
+
+#[test]
+fn engine_side_wake_that_publishes_does_not_panic() {
+    // NRT back-pressure: the publisher waits for room in the engine queue; handing the
+    // queued message to the engine wakes it, and the wake publishes again.
+    static T: Topic<u32, 8, 1, 4> = Topic::new(Remote::Nrt, None);
+    let p = T.publisher();
+    for v in 0..4 {
+        p.send(v, 0).unwrap();
+    }
+    let (w, waker) = publishing_waker(&T, 77);
+    let loan = p.alloc(5).unwrap();
+    let mut fut = p.publish_wait(loan, 1);
+    assert!(poll_once(&mut fut, &waker).is_pending());
+    let tok = T.pending().unwrap();
+    T.pending_done(tok, true);
+    assert_eq!(w.calls.load(std::sync::atomic::Ordering::SeqCst), 1);
+    assert_eq!(T.stats().published, 5, "the wake's publish went through");
 }

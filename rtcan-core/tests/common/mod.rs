@@ -39,6 +39,10 @@ pub struct TestHost {
     pub done: Vec<(u8, Option<Token>, TxOutcome)>,
     pub events: Vec<Event>,
     pub fingerprint_state: u8,
+    /// HRT: hand out the same token for every sample of a topic (as a pool that reuses
+    /// the block the engine just released), overwriting its payload.
+    pub reuse_hrt_tokens: bool,
+    pub hrt_tokens: Vec<Option<Token>>,
 }
 
 impl TestHost {
@@ -51,7 +55,24 @@ impl TestHost {
 impl Host for TestHost {
     fn hrt_sample(&mut self, tx: u8) -> Option<Token> {
         let p = self.hrt.get(tx as usize).cloned().flatten()?;
-        Some(self.add(&p))
+        if !self.reuse_hrt_tokens {
+            return Some(self.add(&p));
+        }
+        let tx = tx as usize;
+        if self.hrt_tokens.len() <= tx {
+            self.hrt_tokens.resize(tx + 1, None);
+        }
+        match self.hrt_tokens[tx] {
+            Some(t) => {
+                self.messages[t.0 as usize] = p;
+                Some(t)
+            }
+            None => {
+                let t = self.add(&p);
+                self.hrt_tokens[tx] = Some(t);
+                Some(t)
+            }
+        }
     }
     fn payload(&self, token: Token) -> &[u8] {
         &self.messages[token.0 as usize]
@@ -101,12 +122,23 @@ pub struct WireFrame {
     pub end: Nanos,
 }
 
+/// Bit times an error frame and the intermission after it occupy the bus.
+pub const ERROR_FRAME_BITS: u64 = 20;
+
 pub struct Bus {
     pub nodes: Vec<Node>,
     pub bitrate: u32,
     pub now: Nanos,
     pub log: Vec<WireFrame>,
+    /// Transmissions to destroy with an error frame: the first one of raw identifier
+    /// `.1` starting at or after global time `.0`. Receivers drop it; the transmitter's
+    /// mailbox stays loaded and retransmits (automatic retransmission, as on bxCAN).
+    pub destroy: Vec<(Nanos, u32)>,
+    /// Transmissions destroyed so far (the frames, as they were on the wire).
+    pub destroyed: Vec<WireFrame>,
     current: Option<WireFrame>,
+    /// No arbitration before this time (end of an error frame).
+    idle_at: Nanos,
 }
 
 impl Bus {
@@ -116,7 +148,10 @@ impl Bus {
             bitrate,
             now: 0,
             log: Vec::new(),
+            destroy: Vec::new(),
+            destroyed: Vec::new(),
             current: None,
+            idle_at: 0,
         }
     }
 
@@ -173,6 +208,9 @@ impl Bus {
             if let Some(cur) = &self.current {
                 next = next.min(cur.end);
             }
+            if self.idle_at > self.now {
+                next = next.min(self.idle_at);
+            }
             let before = self.now;
             self.now = next.max(self.now);
             spins = if self.now == before { spins + 1 } else { 0 };
@@ -181,6 +219,17 @@ impl Bus {
             if let Some(cur) = self.current.clone() {
                 if cur.end <= self.now {
                     self.current = None;
+                    let hit = self
+                        .destroy
+                        .iter()
+                        .position(|&(t, id)| cur.sof >= t && cur.frame.id().raw() == id);
+                    if let Some(k) = hit {
+                        self.destroy.remove(k);
+                        self.nodes[cur.node].can.on_wire = None;
+                        self.idle_at = cur.end + bits_to_ns(ERROR_FRAME_BITS as u32, self.bitrate);
+                        self.destroyed.push(cur);
+                        continue;
+                    }
                     for j in 0..self.nodes.len() {
                         if j == cur.node || !self.nodes[j].alive {
                             continue;
@@ -203,7 +252,8 @@ impl Bus {
                     );
                     self.settle(cur.node);
                     self.log.push(cur);
-                    continue;
+                    // On to timers and arbitration at this same instant: a pending frame
+                    // starts as soon as the bus is idle, not at the next timer event.
                 }
             }
             // 2. Node timers.
@@ -219,7 +269,7 @@ impl Bus {
             }
             // 3. Arbitration when idle: the lowest identifier among all mailboxes wins.
             let mut started = false;
-            if self.current.is_none() {
+            if self.current.is_none() && self.now >= self.idle_at {
                 let mut best: Option<(u32, usize, usize)> = None;
                 for (i, n) in self.nodes.iter().enumerate() {
                     if !n.alive {
