@@ -9,6 +9,7 @@
 //! own calendar with a cursor, and either load the sync frame (master, slot 0), load an
 //! HRT fragment (own reserved slot), or open a free window and fill the mailboxes from
 //! the EDF queue (frames that fit before the window ends, docs/PROTOCOL.md §8).
+use crate::arbiter::{Arbiter, Step};
 use crate::calendar::{free_run, CalendarCursor};
 use crate::clock::SlotClock;
 use crate::counters::Counters;
@@ -25,7 +26,7 @@ use crate::timing::{bits_to_ns, worst_case_bits};
 
 /// A slave that has not seen a sync frame for this many cycles stops transmitting
 /// and reports `Event::SyncLost` (its slot clock can no longer be trusted).
-pub const SYNC_LOSS_CYCLES: u64 = 4;
+pub const SYNC_LOSS_CYCLES: u64 = crate::arbiter::SYNC_LOSS_CYCLES as u64;
 /// Every module sends its heartbeat once every this many cycles (staggered by module).
 pub use crate::heartbeat::HEARTBEAT_PERIOD_CYCLES as HEARTBEAT_CYCLES;
 /// Queue key of NRT messages: after every SRT deadline, FIFO among themselves.
@@ -283,6 +284,10 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     backup: Option<(u8, &'t [u64])>,
     /// Local time at which this backup takes over mastership (MAX: not pending).
     promote_at: Nanos,
+    /// Who sends the sync (docs/PROTOCOL.md §5.6).
+    arbiter: Arbiter,
+    /// Local time since which this module has heard no sync (takeover countdown).
+    silent_since: Nanos,
     rx_state: [RxState; RX],
     arena: [u8; ARENA],
 }
@@ -336,8 +341,19 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             queue: EdfQueue::new(),
             in_flight: 0,
             heartbeat_pending: false,
-            backup: None,
+            // The configured master keeps its masks to take mastership back after a yield.
+            backup: if master {
+                Some((0, tables.master_masks))
+            } else {
+                None
+            },
             promote_at: Nanos::MAX,
+            arbiter: if master {
+                Arbiter::cold_master()
+            } else {
+                Arbiter::listening(None)
+            },
+            silent_since: now,
             rx_state: [RxState::default(); RX],
             arena: [0; ARENA],
         }
@@ -351,14 +367,74 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// Makes this slave backup master number `rank` (1 = first) with the masks of the
     /// hyperperiod (the generated `MASTER_MASKS`, identical for every module of a robot).
-    /// When the sync has been lost (`SYNC_LOSS_CYCLES` cycles without one), backup `rank`
-    /// waits `2 * rank` more cycles — a higher-ranked backup's sync arriving meanwhile
-    /// relocks it as a slave — then becomes master, continuing the cycle numbering so
-    /// that the hyperperiod phase and the slaves' calendars stay valid. Ignored on the
-    /// master, with rank 0 or without masks.
+    /// After `arbiter::takeover_cycles(rank)` = `SYNC_LOSS_CYCLES + 2 * rank` cycles
+    /// without hearing a sync — counted from start-up too, so a backup takes over a bus
+    /// whose master never started — it becomes master, continuing the cycle numbering so
+    /// that the hyperperiod phase and the slaves' calendars stay valid (docs/PROTOCOL.md
+    /// §5.6). Ignored on the master, with rank 0 or without masks.
     pub fn set_backup(&mut self, rank: u8, masks: &'t [u64]) {
         if !self.master && rank > 0 && !masks.is_empty() {
             self.backup = Some((rank, masks));
+            self.arbiter = Arbiter::listening(Some(rank));
+            self.arm_takeover(self.silent_since);
+        }
+    }
+
+    /// The configured master restarting into a bus that may already run (a watchdog or
+    /// software reset, not a power-up): listen first, defer to a running master's sync
+    /// (becoming a backup of rank 0), take over only after `SYNC_LOSS_CYCLES` silent
+    /// cycles. Call right after `new`. Ignored on a slave.
+    pub fn listen_first(&mut self) {
+        if !self.master {
+            return;
+        }
+        self.master = false;
+        self.arbiter = Arbiter::listening(Some(0));
+        self.clock = SlotClock::slave(&self.tables.bus);
+        self.next_boundary = Nanos::MAX;
+        self.arm_takeover(self.silent_since);
+    }
+
+    /// Takeover deadline: `takeover_cycles(rank)` cycles after `from` (the last sync heard,
+    /// or start-up); never for a plain slave.
+    fn arm_takeover(&mut self, from: Nanos) {
+        self.silent_since = from;
+        self.promote_at = match self.arbiter.takeover_after() {
+            Some(n) => from.saturating_add(u64::from(n).saturating_mul(self.tables.bus.cycle_ns())),
+            None => Nanos::MAX,
+        };
+    }
+
+    /// This module's view of the bus is stale (it could not act for a whole cycle, or it
+    /// was bus-off): withdraw everything, forget the slot clock, listen before sending
+    /// again (a master steps down: arbitration rule 1).
+    fn stall(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) {
+        self.arbiter.stalled();
+        self.master = false;
+        self.clock = SlotClock::slave(&self.tables.bus);
+        self.withdraw_all(can);
+        self.arm_takeover(now);
+        host.event(Event::SyncLost);
+    }
+
+    /// Stops the slot sequence and aborts every loaded frame (they were placed on a clock
+    /// that is no longer trusted).
+    fn withdraw_all(&mut self, can: &mut impl Controller) {
+        self.next_boundary = Nanos::MAX;
+        self.window_end = 0;
+        for (i, mb) in self.mailboxes.iter_mut().enumerate() {
+            match mb {
+                Loaded::Free => {}
+                Loaded::Window {
+                    abort_requested, ..
+                } => {
+                    if !*abort_requested {
+                        *abort_requested = true;
+                        can.abort(Mailbox(i as u8));
+                    }
+                }
+                _ => can.abort(Mailbox(i as u8)),
+            }
         }
     }
 
@@ -399,6 +475,17 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// returns the local time at which it must be called next.
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
         self.abort_overdue(now, can);
+        if self.arbiter.rank().is_some()
+            && self.is_synced()
+            && now
+                >= self
+                    .next_boundary
+                    .saturating_add(self.tables.bus.cycle_ns())
+        {
+            // A master-capable module that missed a whole cycle (stalled, or its partition
+            // healed) may have been replaced: it listens before sending (§5.6).
+            self.stall(now, can, host);
+        }
         if !self.master && !self.is_synced() {
             if now < self.promote_at {
                 return self.promote_at;
@@ -412,7 +499,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             let late = self.next_boundary.saturating_add(slot_ns) <= now;
             self.slot_boundary(now, late, can, host);
             if !self.is_synced() {
-                return Nanos::MAX;
+                // Sync lost: next is a backup's takeover, if any.
+                return self.promote_at;
             }
         }
         self.next_wakeup()
@@ -542,12 +630,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// continues from the last cycle it executed (so `abs_cycle mod hyperperiod` and the
     /// sync counter stay consistent with what slaves knew), on this module's own clock.
     fn promote(&mut self, now: Nanos, host: &mut impl Host) {
-        let Some((_, masks)) = self.backup else {
-            self.promote_at = Nanos::MAX;
-            return;
-        };
         let bus = self.tables.bus;
         let cycle = bus.cycle_ns().max(1);
+        let silent = now.saturating_sub(self.silent_since) / cycle;
+        let Some((_, masks)) = self.backup.filter(|_| {
+            self.arbiter
+                .silence(u32::try_from(silent).unwrap_or(u32::MAX))
+                == Step::TakeOver
+        }) else {
+            // Not yet (a timer that fired early) or never (a plain slave).
+            self.arm_takeover(self.silent_since);
+            return;
+        };
         let start_local = now.saturating_add(bus.slot_ns);
         let elapsed = start_local.saturating_sub(self.pos.start_local);
         let c0 = self.pos.abs_cycle + elapsed.div_ceil(cycle).max(1);
@@ -627,27 +721,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             if abs_cycle >= self.last_sync_cycle + SYNC_LOSS_CYCLES {
                 // The slot clock can no longer be trusted: stop transmitting until the
                 // next sync frame restarts the slot sequence.
-                self.next_boundary = Nanos::MAX;
-                self.window_end = 0;
-                // Frames still waiting were placed on that clock: withdraw them.
-                for (i, mb) in self.mailboxes.iter_mut().enumerate() {
-                    match mb {
-                        Loaded::Free => {}
-                        Loaded::Window {
-                            abort_requested, ..
-                        } => {
-                            if !*abort_requested {
-                                *abort_requested = true;
-                                can.abort(Mailbox(i as u8));
-                            }
-                        }
-                        _ => can.abort(Mailbox(i as u8)),
-                    }
-                }
-                if let Some((rank, _)) = self.backup {
-                    let wait = 2 * u64::from(rank) * self.tables.bus.cycle_ns();
-                    self.promote_at = self.pos.start_local.saturating_add(wait);
-                }
+                // Frames still waiting were placed on that clock: withdraw them. A
+                // master-capable module's takeover is armed from the last sync it heard.
+                self.withdraw_all(can);
                 host.event(Event::SyncLost);
                 return;
             }
@@ -885,7 +961,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     ) {
         let id = frame.id();
         if id.is_sync() {
-            self.on_sync(frame, sof, host);
+            self.on_sync(frame, sof, can, host);
             return;
         }
         let msg = id.msg_id().0;
@@ -940,21 +1016,31 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let _ = can;
     }
 
-    fn on_sync(&mut self, frame: &Frame, sof: Nanos, host: &mut impl Host) {
+    fn on_sync(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
         let spc = self.tables.bus.slots_per_cycle;
         let Some(sync) = parse_sync(frame, spc) else {
             Counters::bump(&mut self.counters.rx_bad_sync);
             return;
         };
-        if self.master {
-            // Another node claims mastership: count it, keep our own clock.
-            Counters::bump(&mut self.counters.rx_bad_sync);
-            return;
+        if self.arbiter.foreign_sync() == Step::Yield {
+            // Another master: step down at once and follow it; if it yielded too, the
+            // ranked takeover elects one of us (§5.6).
+            Counters::bump(&mut self.counters.master_yields);
+            self.master = false;
+            self.clock = SlotClock::slave(&self.tables.bus);
+            self.withdraw_all(can);
+            host.event(Event::SyncLost);
         }
         let was_synced = self.is_synced();
-        // A master's sync (the configured one or a higher-ranked backup) cancels a
-        // pending takeover.
-        self.promote_at = Nanos::MAX;
+        // A master's sync (the configured one or a better-ranked backup) restarts the
+        // takeover countdown.
+        self.arm_takeover(sof);
         if !self.clock.on_sync(sof, sync.cycle) {
             return;
         }

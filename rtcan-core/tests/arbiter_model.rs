@@ -1,4 +1,9 @@
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 //! Exhaustive model check of the sync-master arbitration (`rtcan_core::arbiter`,
 //! docs/PROTOCOL.md §5.6) at cycle granularity.
 //!
@@ -165,15 +170,34 @@ impl Checker {
         // A running master is never joined by a module that listened first.
         if t.prev_senders.count_ones() == 1 && count >= 2 {
             let newcomers = senders & !t.prev_senders & !t.cold;
-            assert_eq!(newcomers, 0, "a listening module joined a running master: {}", ctx());
+            assert_eq!(
+                newcomers,
+                0,
+                "a listening module joined a running master: {}",
+                ctx()
+            );
         }
         // Liveness between events.
-        t.gap_run = if count == 0 && any_alive { t.gap_run + 1 } else { 0 };
-        assert!(t.gap_run <= MAX_GAP, "no sync for {} cycles: {}", t.gap_run, ctx());
+        t.gap_run = if count == 0 && any_alive {
+            t.gap_run + 1
+        } else {
+            0
+        };
+        assert!(
+            t.gap_run <= MAX_GAP,
+            "no sync for {} cycles: {}",
+            t.gap_run,
+            ctx()
+        );
         // Convergence after the last event.
         if t.cycle >= t.last_event + CONVERGE && any_alive {
             assert_eq!(count, 1, "not converged: {}", ctx());
-            assert_eq!(senders, t.prev_senders, "master changed after convergence: {}", ctx());
+            assert_eq!(
+                senders,
+                t.prev_senders,
+                "master changed after convergence: {}",
+                ctx()
+            );
         }
         // Who survives a split brain: nobody, or any one sender.
         let mut survivors: Vec<Option<usize>> = vec![None];
