@@ -42,6 +42,8 @@ pub struct Counters {
     pub sync_missed: u32,
     /// Bus-off entries reported by the driver.
     pub bus_off: u32,
+    /// Entries into error-passive reported by the driver (`Engine::on_error_state`).
+    pub error_passive: u32,
     /// Times this module stopped being master because it heard another master's sync
     /// (split brain detected, docs/PROTOCOL.md §5.6).
     pub master_yields: u32,

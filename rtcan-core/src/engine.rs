@@ -12,6 +12,7 @@
 use crate::arbiter::{Arbiter, Step};
 use crate::calendar::{free_run, CalendarCursor};
 use crate::clock::SlotClock;
+use crate::confinement::{ErrorState, Level};
 use crate::counters::Counters;
 use crate::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult, MAILBOXES};
 use crate::fragment::{crc16_update, fragment_count, fragment_data, RxState, RxStep, CRC16_INIT};
@@ -288,6 +289,8 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     arbiter: Arbiter,
     /// Local time since which this module has heard no sync (takeover countdown).
     silent_since: Nanos,
+    /// Last fault-confinement state reported by the driver.
+    error: ErrorState,
     rx_state: [RxState; RX],
     arena: [u8; ARENA],
 }
@@ -354,6 +357,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 Arbiter::listening(None)
             },
             silent_since: now,
+            error: ErrorState {
+                tec: 0,
+                rec: 0,
+                bus_off: false,
+            },
             rx_state: [RxState::default(); RX],
             arena: [0; ARENA],
         }
@@ -487,8 +495,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.stall(now, can, host);
         }
         if !self.master && !self.is_synced() {
-            if now < self.promote_at {
-                return self.promote_at;
+            if now < self.promote_at || self.error.bus_off {
+                return self.next_wakeup();
             }
             self.promote(now, host);
         }
@@ -509,8 +517,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// The local time `poll` must run next (slot boundary or a window-close abort).
     pub fn next_wakeup(&self) -> Nanos {
         if !self.is_synced() {
-            // Unsynced: nothing to do before the next sync, or a backup's takeover.
-            return self.promote_at;
+            // Unsynced: nothing to do before the next sync, or a backup's takeover (not
+            // while bus-off: recovery re-arms it).
+            return if self.error.bus_off {
+                Nanos::MAX
+            } else {
+                self.promote_at
+            };
         }
         let mut next = self.next_boundary;
         if self.in_flight == 0 {
@@ -961,7 +974,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     ) {
         let id = frame.id();
         if id.is_sync() {
-            self.on_sync(frame, sof, can, host);
+            // A bus-off controller receives nothing; a driver that still hands frames
+            // over must not relock the module before its recovery.
+            if !self.error.bus_off {
+                self.on_sync(frame, sof, can, host);
+            }
             return;
         }
         let msg = id.msg_id().0;
@@ -1220,9 +1237,44 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         Counters::bump(&mut self.counters.rx_overrun);
     }
 
-    /// The driver saw bus-off.
+    /// The driver saw bus-off. Counts only: a driver that can report the error counters
+    /// and the recovery uses `on_error_state`, which also stops and rejoins the module.
     pub fn on_bus_off(&mut self) {
         Counters::bump(&mut self.counters.bus_off);
+    }
+
+    /// The controller's fault-confinement state changed (docs/PROTOCOL.md §5.7), at local
+    /// time `now`. Entering error-passive is counted (`error_passive`); the module keeps
+    /// its slots. Entering bus-off is counted (`bus_off`) and stops the module: every
+    /// mailbox is withdrawn, a master steps down, `Event::SyncLost` is reported, and
+    /// nothing is sent — not even a takeover — until the driver reports the recovery;
+    /// then the module rejoins like a slave (two syncs) or, master-capable, listens
+    /// first (§5.6).
+    pub fn on_error_state(
+        &mut self,
+        now: Nanos,
+        state: ErrorState,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
+        let (was, is) = (self.error.level(), state.level());
+        self.error = state;
+        match (was, is) {
+            (Level::Active, Level::Passive) => Counters::bump(&mut self.counters.error_passive),
+            (Level::Active | Level::Passive, Level::BusOff) => {
+                Counters::bump(&mut self.counters.bus_off);
+                self.stall(now, can, host);
+            }
+            // Recovered: listen again from now.
+            (Level::BusOff, _) => self.arm_takeover(now),
+            _ => {}
+        }
+    }
+
+    /// Last fault-confinement state reported by the driver (TEC, REC, bus-off); the
+    /// entry counts are `counters().error_passive` and `counters().bus_off`.
+    pub fn error_state(&self) -> ErrorState {
+        self.error
     }
 }
 
