@@ -10,8 +10,9 @@ pub struct Counters {
     pub rx_bad_dlc: u32,
     /// Fragments out of order (loss or overrun upstream).
     pub rx_out_of_order: u32,
-    /// Transfers failing the CRC (frames of two transmissions mixed).
-    pub rx_crc: u32,
+    /// Fragments of another transfer than the one in progress (its rest and the other's
+    /// start were lost): transfer discarded, never mixed (docs/PROTOCOL.md §7.4).
+    pub rx_other_transfer: u32,
     /// Transfers abandoned by the sender mid-way (a new first fragment arrived).
     pub rx_incomplete: u32,
     /// Frames for a topic whose configured size does not fit its buffer (a build bug).

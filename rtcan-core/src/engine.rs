@@ -15,7 +15,7 @@ use crate::clock::SlotClock;
 use crate::confinement::{ErrorState, Level};
 use crate::counters::Counters;
 use crate::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult, MAILBOXES};
-use crate::fragment::{crc16_update, fragment_count, fragment_data, RxState, RxStep, CRC16_INIT};
+use crate::fragment::{fragment_count, fragment_data, fragment_field, RxState, RxStep};
 use crate::frame::Frame;
 use crate::heartbeat::{heartbeat_frame, parse_heartbeat, Heartbeat};
 use crate::id::{CanId, Class, FIRST_TOPIC_MSG_ID, HEARTBEAT_BASE, LAXITY_HRT, LAXITY_NRT};
@@ -147,38 +147,6 @@ impl Policy {
     };
 }
 
-/// Transfer CRC computed as fragments are loaded (docs/PROTOCOL.md §7.2): the engine
-/// never hashes a whole message inside a slot handler, only the bytes of the frame it
-/// loads. `upto` makes a reload after an abort free.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct TxCrc {
-    value: u16,
-    upto: u16,
-}
-
-impl TxCrc {
-    const NEW: TxCrc = TxCrc {
-        value: CRC16_INIT,
-        upto: 0,
-    };
-
-    /// Covers the payload bytes of fragment `counter`, then returns the CRC to use for
-    /// it (complete whenever the fragment reaches the CRC bytes: they follow the payload).
-    fn advance(&mut self, payload: &[u8], counter: u8) -> u16 {
-        let size = payload.len();
-        if size > 8 {
-            let count = fragment_count(size) as usize;
-            let start = 8 * count.saturating_sub(counter as usize + 1);
-            let end = (start + 8).min(size);
-            if let Some(bytes) = payload.get(self.upto as usize..end) {
-                self.value = crc16_update(self.value, bytes);
-                self.upto = end as u16;
-            }
-        }
-        self.value
-    }
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Item {
     /// A topic message: `fragment` is the counter of the next frame to send.
@@ -186,7 +154,9 @@ enum Item {
         tx: u8,
         token: Token,
         fragment: u8,
-        crc: TxCrc,
+        /// Transfer ID (docs/PROTOCOL.md §7.4), taken when the first fragment is first
+        /// loaded; kept across aborts and reloads.
+        tid: Option<u8>,
         deadline: Nanos,
     },
     /// This module's heartbeat.
@@ -250,7 +220,7 @@ impl Position {
 struct HrtTransfer {
     tx: u8,
     token: Token,
-    crc: TxCrc,
+    tid: u8,
 }
 
 /// Engine of one module. `RX`: receive topics; `ARENA`: reassembly bytes; `Q`: SRT/NRT
@@ -291,6 +261,9 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     silent_since: Nanos,
     /// Last fault-confinement state reported by the driver.
     error: ErrorState,
+    /// Next transfer ID of each transmit topic (index = `TxIndex`, a `u8`, so every
+    /// index has an entry; docs/PROTOCOL.md §7.4).
+    tx_tid: [u8; 256],
     rx_state: [RxState; RX],
     arena: [u8; ARENA],
 }
@@ -362,6 +335,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 rec: 0,
                 bus_off: false,
             },
+            tx_tid: [0; 256],
             rx_state: [RxState::default(); RX],
             arena: [0; ARENA],
         }
@@ -785,7 +759,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     self.hrt = Some(HrtTransfer {
                         tx,
                         token,
-                        crc: TxCrc::NEW,
+                        tid: next_tid(&mut self.tx_tid, tx),
                     })
                 }
                 None => {
@@ -799,11 +773,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         };
         let payload = host.payload(x.token);
-        let crc = x.crc.advance(payload, fragment);
         let token = x.token;
         let mut data = [0u8; 8];
-        let dlc = fragment_data(payload, crc, fragment, &mut data);
-        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else {
+        let dlc = fragment_data(payload, fragment, &mut data);
+        let field = fragment_field(count, x.tid, fragment);
+        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, field) else {
             return;
         };
         let Some(frame) = Frame::from_parts(id, dlc, data) else {
@@ -850,7 +824,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     tx,
                     token,
                     fragment,
-                    ref mut crc,
+                    ref mut tid,
                     deadline,
                 } => {
                     let Some(topic) = self.tables.tx.get(tx as usize) else {
@@ -869,10 +843,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         }
                     };
                     let payload = host.payload(token);
-                    let crc = crc.advance(payload, fragment);
                     let mut data = [0u8; 8];
-                    let dlc = fragment_data(payload, crc, fragment, &mut data);
-                    let Some(id) = CanId::new(laxity, topic.msg_id, fragment) else {
+                    let dlc = fragment_data(payload, fragment, &mut data);
+                    // The transfer takes its ID when its first fragment is first loaded,
+                    // so two transfers of a topic loaded together get different IDs.
+                    let tid = *tid.get_or_insert_with(|| next_tid(&mut self.tx_tid, tx));
+                    let count = fragment_count(topic.size as usize);
+                    let field = fragment_field(count, tid, fragment);
+                    let Some(id) = CanId::new(laxity, topic.msg_id, field) else {
                         continue;
                     };
                     match Frame::from_parts(id, dlc, data) {
@@ -1026,7 +1004,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             RxStep::Dropped(why) => Counters::bump(match why {
                 crate::fragment::RxDrop::BadDlc => &mut self.counters.rx_bad_dlc,
                 crate::fragment::RxDrop::OutOfOrder => &mut self.counters.rx_out_of_order,
-                crate::fragment::RxDrop::Crc => &mut self.counters.rx_crc,
+                crate::fragment::RxDrop::OtherTransfer => &mut self.counters.rx_other_transfer,
                 crate::fragment::RxDrop::BadSize => &mut self.counters.rx_bad_size,
             }),
         }
@@ -1124,7 +1102,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             } => match result {
                 // Reported only if the transfer is still the active one: an earlier
                 // fragment may have failed, and the transfer was then already reported
-                // (its remaining fragments are discarded by the receivers' CRC).
+                // (its remaining fragments carry its transfer ID: receivers drop them).
                 TxResult::Sent if fragment == 0 => {
                     if self.hrt.is_some_and(|x| x.token == token && x.tx == tx) {
                         self.hrt = None;
@@ -1155,7 +1133,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                             tx,
                             token,
                             fragment,
-                            crc,
+                            tid,
                             deadline,
                         },
                         r,
@@ -1171,7 +1149,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                             tx,
                             token,
                             fragment,
-                            crc,
+                            tid,
                             deadline,
                         };
                         if self.queue.push(key, next).is_err() {
@@ -1207,7 +1185,6 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             Counters::bump(&mut self.counters.queue_full);
             return Err(SubmitError::QueueFull);
         }
-        let crc = TxCrc::NEW;
         let fragment = fragment_count(payload.len()).saturating_sub(1);
         let (key, deadline) = match topic.class {
             Class::Srt => {
@@ -1223,7 +1200,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     tx,
                     token,
                     fragment,
-                    crc,
+                    tid: None,
                     deadline,
                 },
             )
@@ -1275,6 +1252,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// entry counts are `counters().error_passive` and `counters().bus_off`.
     pub fn error_state(&self) -> ErrorState {
         self.error
+    }
+}
+
+/// Takes the next transfer ID of topic `tx` (wrapping: the field keeps its low bits).
+fn next_tid(tx_tid: &mut [u8; 256], tx: u8) -> u8 {
+    match tx_tid.get_mut(usize::from(tx)) {
+        Some(t) => {
+            let id = *t;
+            *t = t.wrapping_add(1);
+            id
+        }
+        None => 0, // unreachable: 256 entries for a u8 index
     }
 }
 
