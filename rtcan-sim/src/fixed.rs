@@ -5,7 +5,7 @@
 //! queued at its deadline (HRT: the next period) is dropped. This is what the bus does
 //! without temporal isolation; it shares no scheduling code with the engine.
 use rtcan_core::driver::{Mailbox, Token, TxResult, MAILBOXES};
-use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
+use rtcan_core::fragment::{fragment_count, fragment_data};
 use rtcan_core::{CanId, Class, Controller, Frame, Host, Nanos};
 
 use crate::bus::Module;
@@ -17,7 +17,6 @@ struct Msg {
     prio: u8,
     tx: u8,
     token: Token,
-    crc: u16,
     next_fragment: u8,
     deadline: Nanos,
     loaded: Option<usize>,
@@ -85,14 +84,12 @@ impl<'t> FixedNode<'t> {
 
     fn enqueue(&mut self, tx: u8, token: Token, deadline: Nanos) {
         let payload = self.host.payload(token);
-        let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
         let next_fragment = fragment_count(payload.len()).saturating_sub(1);
         let prio = self.prio(tx);
         self.queue.push(Msg {
             prio,
             tx,
             token,
-            crc,
             next_fragment,
             deadline,
             loaded: None,
@@ -134,7 +131,6 @@ impl<'t> FixedNode<'t> {
             let mut data = [0u8; 8];
             let dlc = fragment_data(
                 self.host.payload(m.token),
-                m.crc,
                 m.next_fragment,
                 &mut data,
             );

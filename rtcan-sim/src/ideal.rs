@@ -5,7 +5,7 @@
 //! before the window does (guard included). No arbitration, no interrupt latency, no
 //! clock error, no heartbeats: it is an upper bound for any distributed policy on the
 //! same windows, not something a CAN bus can do.
-use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
+use rtcan_core::fragment::{fragment_count, fragment_data};
 use rtcan_core::timing::{bits_to_ns, exact_bits, INTERMISSION_BITS};
 use rtcan_core::{CanId, Class, Frame, Nanos};
 
@@ -42,13 +42,12 @@ pub fn schedule(
         for (seq, &at) in times.iter().enumerate() {
             let mut payload = vec![0u8; t.size];
             fill_payload(&mut payload, seq as u32, t.node as u8, t.tx);
-            let crc = if t.size > 8 { crc16(&payload) } else { 0 };
             let n = fragment_count(t.size);
             let frames = (0..n)
                 .rev()
                 .filter_map(|c| {
                     let mut data = [0u8; 8];
-                    let dlc = fragment_data(&payload, crc, c, &mut data);
+                    let dlc = fragment_data(&payload, c, &mut data);
                     let f = Frame::from_parts(CanId::new(1, t.msg_id, c)?, dlc, data)?;
                     Some((f, bits_to_ns(exact_bits(&f), bus.bitrate) - ifs))
                 })
@@ -159,10 +158,9 @@ pub fn offered_ns(
         {
             let mut payload = vec![0u8; t.size];
             fill_payload(&mut payload, seq as u32, t.node as u8, t.tx);
-            let crc = if t.size > 8 { crc16(&payload) } else { 0 };
             for c in 0..fragment_count(t.size) {
                 let mut data = [0u8; 8];
-                let dlc = fragment_data(&payload, crc, c, &mut data);
+                let dlc = fragment_data(&payload, c, &mut data);
                 if let Some(f) =
                     CanId::new(1, t.msg_id, c).and_then(|id| Frame::from_parts(id, dlc, data))
                 {

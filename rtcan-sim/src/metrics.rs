@@ -3,7 +3,7 @@
 //! latency and deadline misses, bus load per class, slot overlaps.
 use std::collections::HashMap;
 
-use rtcan_core::fragment::fragment_count;
+use rtcan_core::fragment::{counter_of, fragment_count};
 use rtcan_core::timing::INTERMISSION_BITS;
 use rtcan_core::{Class, MsgId, Nanos};
 
@@ -203,9 +203,11 @@ pub fn compute(
             continue;
         };
         let Some(t) = topics.get(ti) else { continue };
+        // The fragment field also carries the transfer ID (docs/PROTOCOL.md §7.1).
+        let counter = counter_of(t.size, id.fragment());
         match t.class {
             Class::Hrt => {
-                if id.fragment() + 1 == fragment_count(t.size)
+                if counter + 1 == fragment_count(t.size)
                     && w.sof >= win.from
                     && w.sof < win.to
                 {
@@ -218,10 +220,10 @@ pub fn compute(
                 let (Some(cur), Some(d)) = (current.get_mut(ti), done.get_mut(ti)) else {
                     continue;
                 };
-                if id.fragment() + 1 == fragment_count(t.size) {
+                if counter + 1 == fragment_count(t.size) {
                     *cur = Some(payload_seq(w.frame.data()));
                 }
-                if id.fragment() == 0 {
+                if counter == 0 {
                     if let Some(slot) = cur
                         .take()
                         .and_then(|seq| d.get_mut(usize::try_from(seq).ok()?))

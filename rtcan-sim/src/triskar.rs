@@ -370,7 +370,10 @@ fn srt_fifo(
         let ends: Vec<Nanos> = wire
             .iter()
             .filter(|w| w.ok && w.node == t.node && !w.frame.id().is_sync())
-            .filter(|w| w.frame.id().msg_id() == t.msg_id && w.frame.id().fragment() == 0)
+            .filter(|w| {
+                w.frame.id().msg_id() == t.msg_id
+                    && rtcan_core::fragment::counter_of(t.size, w.frame.id().fragment()) == 0
+            })
             .map(|w| w.end)
             .collect();
         let ev = events.get(&(t.node, t.tx)).map_or(&[][..], Vec::as_slice);
