@@ -96,15 +96,15 @@ mod tests {
             tx: 0,
             fragment: 0,
         }];
-        assert_eq!(arena_bytes(&rx), 8 + 14);
-        assert!(tables_fit(&tables(&rx, &cal, &tx), 2, 22));
+        assert_eq!(arena_bytes(&rx), 8 + 12);
+        assert!(tables_fit(&tables(&rx, &cal, &tx), 2, 20));
         assert!(
-            !tables_fit(&tables(&rx, &cal, &tx), 2, 21),
+            !tables_fit(&tables(&rx, &cal, &tx), 2, 19),
             "arena too small"
         );
-        assert!(!tables_fit(&tables(&rx, &cal, &tx), 1, 22), "rx count");
+        assert!(!tables_fit(&tables(&rx, &cal, &tx), 1, 20), "rx count");
         let unsorted = [rx[1], rx[0]];
-        assert!(!tables_fit(&tables(&unsorted, &cal, &tx), 2, 22));
+        assert!(!tables_fit(&tables(&unsorted, &cal, &tx), 2, 20));
         let bad_cal = [CalEntry {
             slot: 1,
             tx: 1,

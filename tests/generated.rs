@@ -155,7 +155,7 @@ fn topic_constants_equal_the_plan() {
         (Class::Hrt, 8, 1, 1, Some(30))
     );
     assert_eq!(robot::topics::VELOCITY.deadline_ns, Some(10_000_000));
-    assert_eq!(robot::topics::LOG.fragments, 5);
+    assert_eq!(robot::topics::LOG.fragments, 4);
     // encoder2 is consumed on its own module (odometry on motor2): never on the bus.
     assert_eq!(
         (
