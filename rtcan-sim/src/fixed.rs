@@ -129,11 +129,7 @@ impl<'t> FixedNode<'t> {
                 break;
             };
             let mut data = [0u8; 8];
-            let dlc = fragment_data(
-                self.host.payload(m.token),
-                m.next_fragment,
-                &mut data,
-            );
+            let dlc = fragment_data(self.host.payload(m.token), m.next_fragment, &mut data);
             let (Some(id), true) = (CanId::new(m.prio, topic.msg_id, m.next_fragment), true) else {
                 break;
             };

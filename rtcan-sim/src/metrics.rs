@@ -207,10 +207,7 @@ pub fn compute(
         let counter = counter_of(t.size, id.fragment());
         match t.class {
             Class::Hrt => {
-                if counter + 1 == fragment_count(t.size)
-                    && w.sof >= win.from
-                    && w.sof < win.to
-                {
+                if counter + 1 == fragment_count(t.size) && w.sof >= win.from && w.sof < win.to {
                     if let Some(v) = sofs.get_mut(ti) {
                         v.push(w.sof);
                     }
