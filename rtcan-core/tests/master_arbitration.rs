@@ -151,3 +151,57 @@ fn master_restarted_with_listen_first_never_collides() {
     assert_eq!(two_sync_cycles(&s), Vec::<Nanos>::new());
     hrt_on_time(&bus, &p, 0, &[0, 2], 15);
 }
+
+#[test]
+fn returning_backup_follows_the_running_master() {
+    let (mut bus, p) = paper_bus_with_backups();
+    bus.run(10 * CYCLE_NS);
+    bus.nodes[2].alive = false;
+    let cut = bus.now;
+    bus.run(cut + 30 * CYCLE_NS);
+    bus.nodes[2].alive = true;
+    let back = bus.now;
+    bus.run(back + 30 * CYCLE_NS);
+    let s = syncs(&bus, cut);
+    assert!(
+        s.iter().all(|(n, _)| *n == 0),
+        "only the master sends syncs"
+    );
+    assert_eq!(two_sync_cycles(&s), Vec::<Nanos>::new());
+    assert!(bus.nodes[2].engine.is_synced() && !bus.nodes[2].engine.is_master());
+    hrt_on_time(&bus, &p, 0, &[0, 1, 2], 20);
+}
+
+#[test]
+fn chain_of_failures_and_returns_keeps_one_master() {
+    let (mut bus, p) = paper_bus_with_backups();
+    bus.run(10 * CYCLE_NS);
+    // Master dies: backup 1 takes over. Backup 1 dies: backup 2 takes over.
+    bus.nodes[0].alive = false;
+    let t = bus.now;
+    bus.run(t + 20 * CYCLE_NS);
+    assert!(bus.nodes[1].engine.is_master());
+    bus.nodes[1].alive = false;
+    let t = bus.now;
+    bus.run(t + 20 * CYCLE_NS);
+    assert!(bus.nodes[2].engine.is_master());
+    // Both come back (resumed): they defer to backup 2.
+    bus.nodes[0].alive = true;
+    let t = bus.now;
+    bus.run(t + 3 * CYCLE_NS);
+    bus.nodes[1].alive = true;
+    let back = bus.now;
+    bus.run(back + 30 * CYCLE_NS);
+    let s = syncs(&bus, 0);
+    assert_eq!(
+        two_sync_cycles(&s),
+        Vec::<Nanos>::new(),
+        "no cycle with two syncs, ever"
+    );
+    assert!(syncs(&bus, t).iter().all(|(n, _)| *n == 2));
+    let masters: Vec<usize> = (0..3)
+        .filter(|&i| bus.nodes[i].engine.is_master())
+        .collect();
+    assert_eq!(masters, vec![2]);
+    hrt_on_time(&bus, &p, 2, &[0, 1, 2], 20);
+}
