@@ -259,6 +259,8 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     arbiter: Arbiter,
     /// Local time since which this module has heard no sync (takeover countdown).
     silent_since: Nanos,
+    /// Cycle length (ns), precomputed for the per-slot stall test.
+    cycle_ns: Nanos,
     /// Last fault-confinement state reported by the driver.
     error: ErrorState,
     /// Next transfer ID of each transmit topic (index = `TxIndex`, a `u8`, so every
@@ -330,6 +332,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 Arbiter::listening(None)
             },
             silent_since: now,
+            cycle_ns: bus.cycle_ns(),
             error: ErrorState {
                 tec: 0,
                 rec: 0,
@@ -457,12 +460,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// returns the local time at which it must be called next.
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
         self.abort_overdue(now, can);
-        if self.arbiter.rank().is_some()
+        // Time test first: one add and compare on the per-slot path.
+        if now >= self.next_boundary.saturating_add(self.cycle_ns)
+            && self.arbiter.rank().is_some()
             && self.is_synced()
-            && now
-                >= self
-                    .next_boundary
-                    .saturating_add(self.tables.bus.cycle_ns())
         {
             // A master-capable module that missed a whole cycle (stalled, or its partition
             // healed) may have been replaced: it listens before sending (§5.6).
