@@ -906,7 +906,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     continue;
                 }
             }
-            if self.item_wc(&head) < remaining {
+            if self.item_wc(&head) < remaining && !waits_for_topic(&head, &self.mailboxes) {
                 return self.queue.pop();
             }
             break;
@@ -914,10 +914,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if self.policy.fit_window_end {
             let wc = self.wc_ns;
             let tables = self.tables;
+            let mailboxes = self.mailboxes;
             if let Some(found) = self.queue.pop_first_matching(|_, item| {
                 item_dlc(item, &tables)
                     .and_then(|d| wc.get(d as usize))
                     .is_some_and(|w| *w < remaining)
+                    && !waits_for_topic(item, &mailboxes)
             }) {
                 return Some(found);
             }
@@ -1254,6 +1256,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     pub fn error_state(&self) -> ErrorState {
         self.error
     }
+}
+
+/// True for a transfer not started yet (no transfer ID) whose topic has a frame in a
+/// mailbox: it must wait, or the two transfers' fragments would interleave on the wire
+/// and receivers would drop both (docs/PROTOCOL.md §7.1).
+fn waits_for_topic(item: &Item, mailboxes: &[Loaded; MAILBOXES]) -> bool {
+    let Item::Topic { tx, tid: None, .. } = *item else {
+        return false;
+    };
+    mailboxes.iter().any(
+        |m| matches!(m, Loaded::Window { item: Item::Topic { tx: other, .. }, .. } if *other == tx),
+    )
 }
 
 /// Takes the next transfer ID of topic `tx` (wrapping: the field keeps its low bits).

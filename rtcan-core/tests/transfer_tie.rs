@@ -7,11 +7,15 @@
 //! Transfers cannot mix (docs/PROTOCOL.md §7.4): every fragment carries its transfer ID,
 //! so the receiver never glues frames of two transfers, whatever the data. Exhaustive over
 //! loss patterns; the old transfer CRC's blind spot is reproduced to show what changed.
+use rtcan_core::fragment::split_field;
 use rtcan_core::fragment::{
     fragment_count, fragment_data, fragment_field, transfer_id_bits, RxState, RxStep, MAX_PAYLOAD,
 };
 use rtcan_core::id::{CanId, MsgId};
 use rtcan_core::Frame;
+
+mod common;
+mod paper_bus;
 
 const TOPIC: MsgId = MsgId(0x0161);
 
@@ -220,4 +224,45 @@ fn without_transfer_ids_the_same_enumeration_finds_mixes() {
     }
     assert!(three_transfers(8, 0, false).is_ok());
     assert!(three_transfers(25, 0, false).is_ok());
+}
+
+/// In the engine: consecutive SRT transfers of one topic (5 queued at once, so several
+/// first fragments share the mailboxes) take consecutive transfer IDs, every fragment
+/// carries its transfer's, and every message arrives whole.
+#[test]
+fn engine_numbers_the_transfers_of_a_topic() {
+    let (mut bus, p) = paper_bus::paper_bus_with_backups();
+    bus.run(5 * paper_bus::CYCLE_NS);
+    let topic = paper_bus::msg_id(1, 3);
+    let payloads: Vec<Vec<u8>> = (0..5u8)
+        .map(|k| {
+            (0..paper_bus::S_SIZE as u8)
+                .map(|b| b ^ (k * 0x11))
+                .collect()
+        })
+        .collect();
+    for pl in &payloads {
+        bus.submit(1, 3, pl).expect("queued");
+    }
+    let t = bus.now;
+    bus.run(t + 10 * paper_bus::CYCLE_NS);
+    let fields: Vec<(u8, u8)> = bus
+        .log
+        .iter()
+        .filter(|w| w.frame.id().msg_id() == topic)
+        .map(|w| split_field(3, w.frame.id().fragment()))
+        .collect();
+    let expect: Vec<(u8, u8)> = (0..5u8).flat_map(|t| [(t, 2), (t, 1), (t, 0)]).collect();
+    assert_eq!(fields, expect);
+    for rx_node in [0, 2] {
+        let got: Vec<Vec<u8>> = bus.nodes[rx_node]
+            .host
+            .delivered
+            .iter()
+            .filter(|(rx, _, _)| p.tables[rx_node].rx[*rx as usize].msg_id == topic)
+            .map(|d| d.1.clone())
+            .collect();
+        assert_eq!(got, payloads, "node {rx_node}");
+        assert_eq!(bus.nodes[rx_node].engine.counters().rx_other_transfer, 0);
+    }
 }
