@@ -914,12 +914,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if self.policy.fit_window_end {
             let wc = self.wc_ns;
             let tables = self.tables;
-            let mailboxes = self.mailboxes;
+            let mailboxes = &self.mailboxes;
             if let Some(found) = self.queue.pop_first_matching(|_, item| {
                 item_dlc(item, &tables)
                     .and_then(|d| wc.get(d as usize))
                     .is_some_and(|w| *w < remaining)
-                    && !waits_for_topic(item, &mailboxes)
+                    && !waits_for_topic(item, mailboxes)
             }) {
                 return Some(found);
             }
@@ -1260,14 +1260,19 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
 /// True for a transfer not started yet (no transfer ID) whose topic has a frame in a
 /// mailbox: it must wait, or the two transfers' fragments would interleave on the wire
-/// and receivers would drop both (docs/PROTOCOL.md §7.1).
+/// and receivers would drop both (docs/PROTOCOL.md §7.1). Scans the mailboxes only for
+/// a transfer not started yet.
 fn waits_for_topic(item: &Item, mailboxes: &[Loaded; MAILBOXES]) -> bool {
     let Item::Topic { tx, tid: None, .. } = *item else {
         return false;
     };
-    mailboxes.iter().any(
-        |m| matches!(m, Loaded::Window { item: Item::Topic { tx: other, .. }, .. } if *other == tx),
-    )
+    mailboxes.iter().any(|m| match m {
+        Loaded::Window {
+            item: Item::Topic { tx: other, .. },
+            ..
+        } => *other == tx,
+        _ => false,
+    })
 }
 
 /// Takes the next transfer ID of topic `tx` (wrapping: the field keeps its low bits).
