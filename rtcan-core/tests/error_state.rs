@@ -15,27 +15,6 @@ use rtcan_core::confinement::ErrorState;
 use rtcan_core::driver::Event;
 use rtcan_core::Nanos;
 
-fn report(bus: &mut Bus, n: usize, state: ErrorState) {
-    let now = bus.now;
-    let node = &mut bus.nodes[n];
-    let local = node.local(now);
-    node.engine
-        .on_error_state(local, state, &mut node.can, &mut node.host);
-    // Aborts requested by the engine: the controller drops those frames.
-    for mb in node.can.abort_requests.drain(..).collect::<Vec<_>>() {
-        if node.can.mailboxes[mb].take().is_some() {
-            node.engine.on_tx_done(
-                rtcan_core::driver::Mailbox(mb as u8),
-                rtcan_core::driver::TxResult::Aborted,
-                local,
-                &mut node.can,
-                &mut node.host,
-            );
-        }
-    }
-    node.wake = node.global(node.engine.next_wakeup());
-}
-
 fn frames_of(bus: &Bus, n: usize, from: Nanos, to: Nanos) -> usize {
     bus.log
         .iter()

@@ -14,6 +14,7 @@ mod paper_bus;
 use common::*;
 use paper_bus::*;
 use rtcan_core::arbiter::takeover_cycles;
+use rtcan_core::confinement::ErrorState;
 use rtcan_core::Nanos;
 
 #[test]
@@ -204,4 +205,105 @@ fn chain_of_failures_and_returns_keeps_one_master() {
         .collect();
     assert_eq!(masters, vec![2]);
     hrt_on_time(&bus, &p, 2, &[0, 1, 2], 20);
+}
+
+/// A fail/return event of the randomised engine-level check.
+#[derive(Clone, Copy, Debug)]
+enum Fault {
+    /// Node dies (stops polling and receiving).
+    Die(usize),
+    /// Node comes back with its stale state (stall, healed partition).
+    Resume(usize),
+    /// Node is reset: a fresh engine (node 0: cold master, or listening first).
+    Reset(usize, bool),
+    /// Node's controller goes bus-off.
+    BusOff(usize),
+    /// Node's controller recovers (error-active, counters 0).
+    Recover(usize),
+}
+
+fn fault() -> impl proptest::strategy::Strategy<Value = (u64, Fault)> {
+    use proptest::prelude::*;
+    (
+        0u64..12,
+        prop_oneof![
+            (0usize..3).prop_map(Fault::Die),
+            (0usize..3).prop_map(Fault::Resume),
+            (0usize..3, any::<bool>()).prop_map(|(n, c)| Fault::Reset(n, c)),
+            (0usize..3).prop_map(Fault::BusOff),
+            (0usize..3).prop_map(Fault::Recover),
+        ],
+    )
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::test_runner::Config {
+        cases: 64,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x4D41_5354_4552),
+        failure_persistence: None,
+        ..proptest::test_runner::Config::default()
+    })]
+
+    /// The engine under random fail/return/reset/bus-off sequences (gaps in cycles): split brains
+    /// last at most 2 cycles, and `CONVERGE` cycles after the last event exactly one live
+    /// module is master, alone on the bus, and everyone alive follows it.
+    #[test]
+    fn engine_converges_after_any_fault_sequence(faults in proptest::collection::vec(fault(), 1..5)) {
+        const CONVERGE: u64 = 2 * (takeover_cycles(2) as u64 + 1) + 1;
+        let (mut bus, p) = paper_bus_with_backups();
+        bus.run(8 * CYCLE_NS);
+        for (gap, f) in faults {
+            let t = bus.now + gap * CYCLE_NS;
+            bus.run(t);
+            match f {
+                Fault::Die(n) => bus.nodes[n].alive = false,
+                Fault::Resume(n) => bus.nodes[n].alive = true,
+                Fault::BusOff(n) => report(&mut bus, n, ErrorState { tec: 256, rec: 0, bus_off: true }),
+                Fault::Recover(n) => report(&mut bus, n, ErrorState::default()),
+                Fault::Reset(n, cold) => {
+                    let now = bus.now;
+                    let node = &mut bus.nodes[n];
+                    node.engine = TestEngine::new(p.tables[n], node.local(now));
+                    if n > 0 {
+                        node.engine.set_backup(n as u8, p.tables[0].master_masks);
+                    } else if !cold {
+                        node.engine.listen_first();
+                    }
+                    // The controller is reset too, except a frame already on the wire.
+                    for (m, slot) in node.can.mailboxes.iter_mut().enumerate() {
+                        if node.can.on_wire != Some(m) {
+                            *slot = None;
+                        }
+                    }
+                    node.can.abort_requests.clear();
+                    node.wake = node.global(node.engine.next_wakeup());
+                    node.alive = true;
+                }
+            }
+        }
+        let last = bus.now;
+        bus.run(last + (CONVERGE + 10) * CYCLE_NS);
+        // Split brains: runs of cycles with two syncs, at most 2 cycles long.
+        let s = syncs(&bus, 0);
+        let twos = two_sync_cycles(&s);
+        for w in twos.windows(3) {
+            proptest::prop_assert!(w[2] - w[0] > 2 * CYCLE_NS + CYCLE_NS / 2, "split brain over 3 cycles at {w:?}");
+        }
+        // Bus-off nodes are off the bus: they count as dead.
+        let alive: Vec<usize> = (0..3)
+            .filter(|&i| bus.nodes[i].alive && !bus.nodes[i].engine.error_state().bus_off)
+            .collect();
+        if alive.is_empty() {
+            return Ok(());
+        }
+        let masters: Vec<usize> = alive.iter().copied().filter(|&i| bus.nodes[i].engine.is_master()).collect();
+        proptest::prop_assert_eq!(masters.len(), 1, "masters {:?}", masters);
+        let tail = syncs(&bus, last + CONVERGE * CYCLE_NS);
+        proptest::prop_assert!(tail.len() >= 9, "{} syncs in the last 10 cycles", tail.len());
+        proptest::prop_assert!(tail.iter().all(|(n, _)| *n == masters[0]));
+        proptest::prop_assert!(two_sync_cycles(&tail).is_empty());
+        for &i in &alive {
+            proptest::prop_assert!(bus.nodes[i].engine.is_synced(), "node {} not synced", i);
+        }
+    }
 }

@@ -4,6 +4,7 @@
 //! and fault tests share: syncs on the wire, cycles with two syncs, HRT in its slots.
 use crate::common::*;
 use rtcan_core::admission::{admit, build_masks, HrtRequest, Placement};
+use rtcan_core::confinement::ErrorState;
 use rtcan_core::fragment::wire_len;
 use rtcan_core::id::{Class, MsgId};
 use rtcan_core::laxity::LaxityEncoding;
@@ -210,4 +211,27 @@ pub fn paper_bus_with_backups() -> (Bus, Paper) {
     }
     arm_backups(&mut bus, &p);
     (bus, p)
+}
+
+/// The driver reports a fault-confinement state of node `n` now; aborts it requests are
+/// resolved at once (a controller drops those frames).
+pub fn report(bus: &mut Bus, n: usize, state: ErrorState) {
+    let now = bus.now;
+    let node = &mut bus.nodes[n];
+    let local = node.local(now);
+    node.engine
+        .on_error_state(local, state, &mut node.can, &mut node.host);
+    // Aborts requested by the engine: the controller drops those frames.
+    for mb in node.can.abort_requests.drain(..).collect::<Vec<_>>() {
+        if node.can.mailboxes[mb].take().is_some() {
+            node.engine.on_tx_done(
+                rtcan_core::driver::Mailbox(mb as u8),
+                rtcan_core::driver::TxResult::Aborted,
+                local,
+                &mut node.can,
+                &mut node.host,
+            );
+        }
+    }
+    node.wake = node.global(node.engine.next_wakeup());
 }
