@@ -473,6 +473,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             if now < self.promote_at || self.error.bus_off {
                 return self.next_wakeup();
             }
+            if now >= self.promote_at.saturating_add(self.cycle_ns) {
+                // Called more than a cycle after its takeover time: this module was
+                // stalled and its silence count is stale; it listens again (§5.6 rule 1).
+                self.arbiter.stalled();
+                self.arm_takeover(now);
+                return self.next_wakeup();
+            }
             self.promote(now, host);
         }
         let slot_ns = self.tables.bus.slot_ns;

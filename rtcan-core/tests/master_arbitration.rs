@@ -307,3 +307,31 @@ proptest::proptest! {
         }
     }
 }
+
+/// A backup stalled while still listening (it had not heard a sync yet) is past its
+/// takeover time when it comes back: it must listen again, not take over at once.
+#[test]
+fn backup_stalled_while_listening_listens_again() {
+    let (mut bus, p) = paper_bus_with_backups();
+    bus.nodes[2].alive = false;
+    bus.run(30 * CYCLE_NS);
+    // Back just after a sync of the master: a module that did not listen would send its
+    // own sync long before the master's next one.
+    let seen = syncs(&bus, 0).len();
+    while syncs(&bus, 0).len() == seen {
+        let t = bus.now + SLOT_NS / 4;
+        bus.run(t);
+    }
+    bus.nodes[2].alive = true;
+    let back = bus.now;
+    bus.run(back + 20 * CYCLE_NS);
+    assert_eq!(bus.nodes[2].engine.counters().master_yields, 0);
+    let s = syncs(&bus, 0);
+    assert!(
+        s.iter().all(|(n, _)| *n == 0),
+        "only the master sends syncs"
+    );
+    assert_eq!(two_sync_cycles(&s), Vec::<Nanos>::new());
+    assert!(bus.nodes[2].engine.is_synced() && !bus.nodes[2].engine.is_master());
+    hrt_on_time(&bus, &p, 0, &[0, 1, 2], 10);
+}
