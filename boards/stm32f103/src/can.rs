@@ -57,7 +57,7 @@ pub struct CanStats {
 pub enum ErrorChange {
     /// Nothing new.
     None,
-    /// Entered bus-off: tell the engine (`Engine::on_bus_off`).
+    /// Entered bus-off (the glue tells the engine: `Engine::on_error_state`).
     BusOff,
     /// Left bus-off (hardware recovery finished).
     Recovered,
@@ -216,6 +216,11 @@ impl<PULL> BxCan<PULL> {
         };
         self.bus_off = off;
         change
+    }
+
+    /// True while the controller is bus-off (as of the last `check_errors`).
+    pub fn is_bus_off(&self) -> bool {
+        self.bus_off
     }
 
     /// Driver counters.

@@ -1,7 +1,8 @@
 //! Interrupt glue: what each RTIC hardware task does, as functions over the engine, the
 //! adapter, the timer and the host, so the app only locks and calls.
-use crate::can::{BxCan, ErrorChange};
+use crate::can::BxCan;
 use crate::slot_timer::SlotTimer;
+use rtcan_core::confinement::ErrorState;
 use rtcan_core::driver::Host;
 use rtcan_core::engine::Engine;
 
@@ -16,10 +17,28 @@ pub fn on_timer<P, H: Host, const RX: usize, const A: usize, const Q: usize>(
     if !timer.on_interrupt() {
         return;
     }
-    if can.check_errors() == ErrorChange::BusOff {
-        engine.on_bus_off();
-    }
+    report_errors(timer, can, engine, host);
     poll(timer, can, engine, host);
+}
+
+/// Reads the controller's error state and hands it to the engine when it changed
+/// (`Engine::on_error_state`: error-passive counted, bus-off stops the module until the
+/// hardware recovery, then it rejoins after re-synchronising).
+fn report_errors<P, H: Host, const RX: usize, const A: usize, const Q: usize>(
+    timer: &SlotTimer,
+    can: &mut BxCan<P>,
+    engine: &mut Engine<'_, RX, A, Q>,
+    host: &mut H,
+) {
+    can.check_errors();
+    let state = ErrorState {
+        tec: u16::from(can.stats().tec),
+        rec: u16::from(can.stats().rec),
+        bus_off: can.is_bus_off(),
+    };
+    if state != engine.error_state() {
+        engine.on_error_state(timer.now(), state, can, host);
+    }
 }
 
 /// Runs `Engine::poll` and arms the alarm at its answer (again while that is already due).
@@ -66,11 +85,11 @@ pub fn on_tx<P, H: Host, const RX: usize, const A: usize, const Q: usize>(
 }
 
 /// CAN status-change interrupt (CAN_SCE): error counters, bus-off entry and recovery.
-pub fn on_sce<P, const RX: usize, const A: usize, const Q: usize>(
+pub fn on_sce<P, H: Host, const RX: usize, const A: usize, const Q: usize>(
+    timer: &SlotTimer,
     can: &mut BxCan<P>,
     engine: &mut Engine<'_, RX, A, Q>,
+    host: &mut H,
 ) {
-    if can.check_errors() == ErrorChange::BusOff {
-        engine.on_bus_off();
-    }
+    report_errors(timer, can, engine, host);
 }

@@ -92,7 +92,7 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
 
     /// CAN_SCE: error counters, bus-off.
     pub fn on_sce(&mut self) {
-        glue::on_sce(&mut self.can, &mut self.engine);
+        glue::on_sce(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
     }
 
     /// Kick: SRT/NRT messages published by node tasks go to the engine.
