@@ -41,7 +41,7 @@ pub struct Counters {
     pub hrt_late: u32,
     /// Sync frames missed (cycles without sync on a slave).
     pub sync_missed: u32,
-    /// Bus-off entries reported by the driver.
+    /// Bus-off entries reported by the driver (`Engine::on_error_state`).
     pub bus_off: u32,
     /// Entries into error-passive reported by the driver (`Engine::on_error_state`).
     pub error_passive: u32,

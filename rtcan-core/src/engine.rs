@@ -1224,12 +1224,6 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         Counters::bump(&mut self.counters.rx_overrun);
     }
 
-    /// The driver saw bus-off. Counts only: a driver that can report the error counters
-    /// and the recovery uses `on_error_state`, which also stops and rejoins the module.
-    pub fn on_bus_off(&mut self) {
-        Counters::bump(&mut self.counters.bus_off);
-    }
-
     /// The controller's fault-confinement state changed (docs/PROTOCOL.md §5.7), at local
     /// time `now`. Entering error-passive is counted (`error_passive`); the module keeps
     /// its slots. Entering bus-off is counted (`bus_off`) and stops the module: every
