@@ -77,15 +77,15 @@ mod tests {
             tx: 0,
             fragment: 0,
         }];
-        assert_eq!(arena_bytes(&rx), 8 + 14);
-        assert!(tables_fit(&tables(&rx, &cal, &tx), 2, 22));
+        assert_eq!(arena_bytes(&rx), 8 + 12);
+        assert!(tables_fit(&tables(&rx, &cal, &tx), 2, 20));
         assert!(
-            !tables_fit(&tables(&rx, &cal, &tx), 2, 21),
+            !tables_fit(&tables(&rx, &cal, &tx), 2, 19),
             "arena too small"
         );
-        assert!(!tables_fit(&tables(&rx, &cal, &tx), 1, 22), "rx count");
+        assert!(!tables_fit(&tables(&rx, &cal, &tx), 1, 20), "rx count");
         let unsorted = [rx[1], rx[0]];
-        assert!(!tables_fit(&tables(&unsorted, &cal, &tx), 2, 22));
+        assert!(!tables_fit(&tables(&unsorted, &cal, &tx), 2, 20));
         // A buffer starting inside the previous one does not build.
         let overlap = [
             rx[0],
@@ -94,7 +94,7 @@ mod tests {
                 ..rx[1]
             },
         ];
-        assert!(!tables_fit(&tables(&overlap, &cal, &tx), 2, 22), "overlap");
+        assert!(!tables_fit(&tables(&overlap, &cal, &tx), 2, 20), "overlap");
         let bad_cal = [CalEntry {
             slot: 1,
             tx: 1,

@@ -155,7 +155,7 @@ fn topic_constants_equal_the_plan() {
         (Class::Hrt, 8, 1, 1, Some(30))
     );
     assert_eq!(robot::topics::VELOCITY.deadline_ns, Some(10_000_000));
-    assert_eq!(robot::topics::LOG.fragments, 5);
+    assert_eq!(robot::topics::LOG.fragments, 4);
     // encoder2 is consumed on its own module (odometry on motor2): never on the bus.
     assert_eq!(
         (
@@ -215,14 +215,14 @@ fn module_tables_equal_the_plan_and_the_macro_output() {
         triskar::motor2::TABLES.calendar,
         robot::motor2::TABLES.calendar
     );
-    // Engine sizes: motor1 receives `velocity` (12 B + CRC) only; the gateway receives
-    // odometry (24+2), proximity (8), battery (5), log (32+2).
+    // Engine sizes: motor1 receives `velocity` (12 B) only; the gateway receives
+    // odometry (24), proximity (8), battery (5), log (32).
     assert_eq!(
         (robot::motor1::RX_COUNT, robot::motor1::ARENA_BYTES),
-        (1, 14)
+        (1, 12)
     );
     assert_eq!(robot::gateway::RX_COUNT, 4);
-    assert_eq!(robot::gateway::ARENA_BYTES, 26 + 8 + 5 + 34);
+    assert_eq!(robot::gateway::ARENA_BYTES, 24 + 8 + 5 + 32);
     // psu sends battery and log (NRT, queues 1 and 4) and its heartbeat.
     assert_eq!(robot::psu::QUEUE_CAPACITY, 1 + 1 + 4);
     assert_eq!(
@@ -240,7 +240,9 @@ fn wire_ids(t: &rtcan_model::TopicPlan) -> Vec<u32> {
     };
     let mut ids = Vec::new();
     for lax in laxities {
-        for frag in 0..t.fragments {
+        // Multi-frame topics: any fragment field (transfer ID and counter, PROTOCOL §7.1).
+        let fields = if t.fragments > 1 { 128 } else { 1 };
+        for frag in 0..fields {
             ids.push(CanId::new(lax, t.msg_id, frag).unwrap().raw());
         }
     }

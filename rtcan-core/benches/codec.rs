@@ -4,7 +4,7 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use rtcan_core::fragment::{
-    crc16, fragment_count, fragment_data, wire_len, RxState, RxStep, MAX_PAYLOAD,
+    fragment_count, fragment_data, fragment_field, wire_len, RxState, RxStep, MAX_PAYLOAD,
 };
 use rtcan_core::id::{CanId, MsgId};
 use rtcan_core::laxity::LaxityEncoding;
@@ -12,13 +12,14 @@ use rtcan_core::timing::exact_bits;
 use rtcan_core::Frame;
 
 fn frames(payload: &[u8]) -> Vec<Frame> {
-    let crc = crc16(payload);
-    (0..fragment_count(payload.len()))
+    let count = fragment_count(payload.len());
+    (0..count)
         .rev()
         .map(|c| {
             let mut out = [0; 8];
-            let dlc = fragment_data(payload, crc, c, &mut out);
-            Frame::from_parts(CanId::new(9, MsgId(0x0150), c).unwrap(), dlc, out).unwrap()
+            let dlc = fragment_data(payload, c, &mut out);
+            let field = fragment_field(count, 3, c);
+            Frame::from_parts(CanId::new(9, MsgId(0x0150), field).unwrap(), dlc, out).unwrap()
         })
         .collect()
 }
@@ -78,7 +79,7 @@ fn bench(c: &mut Criterion) {
         })
     });
 
-    // Last fragment of the largest message: CRC-16 over 1022 bytes (the worst case).
+    // Last fragment of the largest message (no transfer CRC: the same cost as any).
     let pmax: Vec<u8> = (0..MAX_PAYLOAD).map(|i| i as u8).collect();
     let fmax = frames(&pmax);
     let mut bufmax = vec![0u8; wire_len(MAX_PAYLOAD)];
@@ -93,7 +94,7 @@ fn bench(c: &mut Criterion) {
         check.step(&mut bufmax.clone(), MAX_PAYLOAD, &last, 0),
         RxStep::Complete(..)
     ));
-    c.bench_function("rx_step_last_fragment_1022B", |b| {
+    c.bench_function("rx_step_last_fragment_256B", |b| {
         b.iter(|| {
             let mut rx = pre;
             matches!(
@@ -103,13 +104,9 @@ fn bench(c: &mut Criterion) {
         })
     });
 
-    // Sender side: CRC of the largest message in one pass (what a sender pays if it
-    // computes the CRC when it latches the message).
-    c.bench_function("crc16_1022B", |b| b.iter(|| crc16(black_box(&pmax))));
-
     let mut out = [0u8; 8];
     c.bench_function("tx_fragment_data", |b| {
-        b.iter(|| fragment_data(black_box(&p20), 0x5A74, black_box(1), &mut out))
+        b.iter(|| fragment_data(black_box(&p20), black_box(1), &mut out))
     });
 }
 

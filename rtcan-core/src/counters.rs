@@ -10,8 +10,9 @@ pub struct Counters {
     pub rx_bad_dlc: u32,
     /// Fragments out of order (loss or overrun upstream).
     pub rx_out_of_order: u32,
-    /// Transfers failing the CRC (frames of two transmissions mixed).
-    pub rx_crc: u32,
+    /// Fragments of another transfer than the one in progress (its rest and the other's
+    /// start were lost): transfer discarded, never mixed (docs/PROTOCOL.md §7.4).
+    pub rx_other_transfer: u32,
     /// Transfers abandoned by the sender mid-way (a new first fragment arrived).
     pub rx_incomplete: u32,
     /// Frames for a topic whose configured size does not fit its buffer (a build bug).
@@ -40,11 +41,16 @@ pub struct Counters {
     pub hrt_late: u32,
     /// Sync frames missed (cycles without sync on a slave).
     pub sync_missed: u32,
-    /// Bus-off entries reported by the driver.
+    /// Bus-off entries reported by the driver (`Engine::on_error_state`).
     pub bus_off: u32,
     /// Whole cycles skipped without handling any of their slots, because `poll` came
     /// more than a cycle late (a forward jump of the local clock, or a long stall).
     pub cycles_skipped: u32,
+    /// Entries into error-passive reported by the driver (`Engine::on_error_state`).
+    pub error_passive: u32,
+    /// Times this module stopped being master because it heard another master's sync
+    /// (split brain detected, docs/PROTOCOL.md §5.6).
+    pub master_yields: u32,
 }
 
 impl Counters {

@@ -9,11 +9,13 @@
 //! own calendar with a cursor, and either load the sync frame (master, slot 0), load an
 //! HRT fragment (own reserved slot), or open a free window and fill the mailboxes from
 //! the EDF queue (frames that fit before the window ends, docs/PROTOCOL.md §8).
+use crate::arbiter::{Arbiter, Step};
 use crate::calendar::{free_run, CalendarCursor};
 use crate::clock::SlotClock;
+use crate::confinement::{ErrorState, Level};
 use crate::counters::Counters;
 use crate::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult, MAILBOXES};
-use crate::fragment::{crc16_update, fragment_count, fragment_data, RxState, RxStep, CRC16_INIT};
+use crate::fragment::{fragment_count, fragment_data, fragment_field, RxState, RxStep};
 use crate::frame::Frame;
 use crate::heartbeat::{heartbeat_frame, parse_heartbeat, Heartbeat};
 use crate::id::{CanId, Class, FIRST_TOPIC_MSG_ID, HEARTBEAT_BASE, LAXITY_HRT, LAXITY_NRT};
@@ -25,7 +27,7 @@ use crate::timing::{bits_to_ns, worst_case_bits};
 
 /// A slave that has not seen a sync frame for this many cycles stops transmitting
 /// and reports `Event::SyncLost` (its slot clock can no longer be trusted).
-pub const SYNC_LOSS_CYCLES: u64 = 4;
+pub const SYNC_LOSS_CYCLES: u64 = crate::arbiter::SYNC_LOSS_CYCLES as u64;
 /// Every module sends its heartbeat once every this many cycles (staggered by module).
 pub use crate::heartbeat::HEARTBEAT_PERIOD_CYCLES as HEARTBEAT_CYCLES;
 /// Queue key of NRT messages: after every SRT deadline, FIFO among themselves.
@@ -177,38 +179,6 @@ impl Policy {
     };
 }
 
-/// Transfer CRC computed as fragments are loaded (docs/PROTOCOL.md §7.2): the engine
-/// never hashes a whole message inside a slot handler, only the bytes of the frame it
-/// loads. `upto` makes a reload after an abort free.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct TxCrc {
-    value: u16,
-    upto: u16,
-}
-
-impl TxCrc {
-    const NEW: TxCrc = TxCrc {
-        value: CRC16_INIT,
-        upto: 0,
-    };
-
-    /// Covers the payload bytes of fragment `counter`, then returns the CRC to use for
-    /// it (complete whenever the fragment reaches the CRC bytes: they follow the payload).
-    fn advance(&mut self, payload: &[u8], counter: u8) -> u16 {
-        let size = payload.len();
-        if size > 8 {
-            let count = fragment_count(size) as usize;
-            let start = 8 * count.saturating_sub(counter as usize + 1);
-            let end = (start + 8).min(size);
-            if let Some(bytes) = payload.get(self.upto as usize..end) {
-                self.value = crc16_update(self.value, bytes);
-                self.upto = end as u16;
-            }
-        }
-        self.value
-    }
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Item {
     /// A topic message: `fragment` is the counter of the next frame to send.
@@ -216,7 +186,9 @@ enum Item {
         tx: u8,
         token: Token,
         fragment: u8,
-        crc: TxCrc,
+        /// Transfer ID (docs/PROTOCOL.md §7.4), taken when the first fragment is first
+        /// loaded; kept across aborts and reloads.
+        tid: Option<u8>,
         deadline: Nanos,
     },
     /// This module's heartbeat.
@@ -291,7 +263,8 @@ impl Position {
 struct HrtTransfer {
     tx: u8,
     token: Token,
-    crc: TxCrc,
+    /// Transfer ID carried in every fragment's ID (docs/PROTOCOL.md §7).
+    tid: u8,
     /// Names this transfer's mailboxes (tokens may be reused by the host).
     seq: u8,
     /// Fragment 0 is loaded: its mailbox reports the outcome.
@@ -332,6 +305,17 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     backup: Option<(u8, &'t [u64])>,
     /// Local time at which this backup takes over mastership (MAX: not pending).
     promote_at: Nanos,
+    /// Who sends the sync (docs/PROTOCOL.md §5.6).
+    arbiter: Arbiter,
+    /// Local time since which this module has heard no sync (takeover countdown).
+    silent_since: Nanos,
+    /// Cycle length (ns), precomputed for the per-slot stall test.
+    cycle_ns: Nanos,
+    /// Last fault-confinement state reported by the driver.
+    error: ErrorState,
+    /// Next transfer ID of each transmit topic (index = `TxIndex`, a `u8`, so every
+    /// index has an entry; docs/PROTOCOL.md §7.4).
+    tx_tid: [u8; 256],
     rx_state: [RxState; RX],
     arena: [u8; ARENA],
 }
@@ -388,8 +372,26 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             queue: EdfQueue::new(),
             in_flight: 0,
             heartbeat_pending: false,
-            backup: None,
+            // The configured master keeps its masks to take mastership back after a yield.
+            backup: if master {
+                Some((0, tables.master_masks))
+            } else {
+                None
+            },
             promote_at: Nanos::MAX,
+            arbiter: if master {
+                Arbiter::cold_master()
+            } else {
+                Arbiter::listening(None)
+            },
+            silent_since: now,
+            cycle_ns: bus.cycle_ns(),
+            error: ErrorState {
+                tec: 0,
+                rec: 0,
+                bus_off: false,
+            },
+            tx_tid: [0; 256],
             rx_state: [RxState::default(); RX],
             arena: [0; ARENA],
         }
@@ -403,14 +405,74 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// Makes this slave backup master number `rank` (1 = first) with the masks of the
     /// hyperperiod (the generated `MASTER_MASKS`, identical for every module of a robot).
-    /// When the sync has been lost (`SYNC_LOSS_CYCLES` cycles without one), backup `rank`
-    /// waits `2 * rank` more cycles — a higher-ranked backup's sync arriving meanwhile
-    /// relocks it as a slave — then becomes master, continuing the cycle numbering so
-    /// that the hyperperiod phase and the slaves' calendars stay valid. Ignored on the
-    /// master, with rank 0 or without masks.
+    /// After `arbiter::takeover_cycles(rank)` = `SYNC_LOSS_CYCLES + 2 * rank` cycles
+    /// without hearing a sync — counted from start-up too, so a backup takes over a bus
+    /// whose master never started — it becomes master, continuing the cycle numbering so
+    /// that the hyperperiod phase and the slaves' calendars stay valid (docs/PROTOCOL.md
+    /// §5.6). Ignored on the master, with rank 0 or without masks.
     pub fn set_backup(&mut self, rank: u8, masks: &'t [u64]) {
         if !self.master && rank > 0 && !masks.is_empty() {
             self.backup = Some((rank, masks));
+            self.arbiter = Arbiter::listening(Some(rank));
+            self.arm_takeover(self.silent_since);
+        }
+    }
+
+    /// The configured master restarting into a bus that may already run (a watchdog or
+    /// software reset, not a power-up): listen first, defer to a running master's sync
+    /// (becoming a backup of rank 0), take over only after `SYNC_LOSS_CYCLES` silent
+    /// cycles. Call right after `new`. Ignored on a slave.
+    pub fn listen_first(&mut self) {
+        if !self.master {
+            return;
+        }
+        self.master = false;
+        self.arbiter = Arbiter::listening(Some(0));
+        self.clock = SlotClock::slave(&self.tables.bus);
+        self.next_boundary = Nanos::MAX;
+        self.arm_takeover(self.silent_since);
+    }
+
+    /// Takeover deadline: `takeover_cycles(rank)` cycles after `from` (the last sync heard,
+    /// or start-up); never for a plain slave.
+    fn arm_takeover(&mut self, from: Nanos) {
+        self.silent_since = from;
+        self.promote_at = match self.arbiter.takeover_after() {
+            Some(n) => from.saturating_add(u64::from(n).saturating_mul(self.tables.bus.cycle_ns())),
+            None => Nanos::MAX,
+        };
+    }
+
+    /// This module's view of the bus is stale (it could not act for a whole cycle, or it
+    /// was bus-off): withdraw everything, forget the slot clock, listen before sending
+    /// again (a master steps down: arbitration rule 1).
+    fn stall(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) {
+        self.arbiter.stalled();
+        self.master = false;
+        self.clock = SlotClock::slave(&self.tables.bus);
+        self.withdraw_all(can);
+        self.arm_takeover(now);
+        host.event(Event::SyncLost);
+    }
+
+    /// Stops the slot sequence and aborts every loaded frame (they were placed on a clock
+    /// that is no longer trusted).
+    fn withdraw_all(&mut self, can: &mut impl Controller) {
+        self.next_boundary = Nanos::MAX;
+        self.window_end = 0;
+        for (i, mb) in self.mailboxes.iter_mut().enumerate() {
+            match mb {
+                Loaded::Free => {}
+                Loaded::Window {
+                    abort_requested, ..
+                } => {
+                    if !*abort_requested {
+                        *abort_requested = true;
+                        can.abort(Mailbox(i as u8));
+                    }
+                }
+                _ => can.abort(Mailbox(i as u8)),
+            }
         }
     }
 
@@ -450,12 +512,28 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// Does everything due at local time `now` (slot boundaries, window closes) and
     /// returns the local time at which it must be called next. O(slots per cycle) however
     /// late it comes: whole cycles in the past are skipped arithmetically (counted in
-    /// `cycles_skipped`, docs/PROTOCOL.md §5.6), never walked slot by slot.
+    /// `cycles_skipped`, docs/PROTOCOL.md §5.8), never walked slot by slot.
     pub fn poll(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) -> Nanos {
         self.abort_overdue(now, can);
+        // Time test first: one add and compare on the per-slot path.
+        if now >= self.next_boundary.saturating_add(self.cycle_ns)
+            && self.arbiter.rank().is_some()
+            && self.is_synced()
+        {
+            // A master-capable module that missed a whole cycle (stalled, or its partition
+            // healed) may have been replaced: it listens before sending (§5.6).
+            self.stall(now, can, host);
+        }
         if !self.master && !self.is_synced() {
-            if now < self.promote_at {
-                return self.promote_at;
+            if now < self.promote_at || self.error.bus_off {
+                return self.next_wakeup();
+            }
+            if now >= self.promote_at.saturating_add(self.cycle_ns) {
+                // Called more than a cycle after its takeover time: this module was
+                // stalled and its silence count is stale; it listens again (§5.6 rule 1).
+                self.arbiter.stalled();
+                self.arm_takeover(now);
+                return self.next_wakeup();
             }
             self.promote(now, host);
         }
@@ -468,7 +546,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             let late = self.next_boundary.saturating_add(slot_ns) <= now;
             self.slot_boundary(now, late, can, host);
             if !self.is_synced() {
-                return Nanos::MAX;
+                // Sync lost: next is a backup's takeover, if any.
+                return self.promote_at;
             }
         }
         self.next_wakeup()
@@ -477,8 +556,13 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// The local time `poll` must run next (slot boundary or a window-close abort).
     pub fn next_wakeup(&self) -> Nanos {
         if !self.is_synced() {
-            // Unsynced: nothing to do before the next sync, or a backup's takeover.
-            return self.promote_at;
+            // Unsynced: nothing to do before the next sync, or a backup's takeover (not
+            // while bus-off: recovery re-arms it).
+            return if self.error.bus_off {
+                Nanos::MAX
+            } else {
+                self.promote_at
+            };
         }
         let mut next = self.next_boundary;
         if self.in_flight == 0 {
@@ -603,12 +687,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     /// continues from the last cycle it executed (so `abs_cycle mod hyperperiod` and the
     /// sync counter stay consistent with what slaves knew), on this module's own clock.
     fn promote(&mut self, now: Nanos, host: &mut impl Host) {
-        let Some((_, masks)) = self.backup else {
-            self.promote_at = Nanos::MAX;
-            return;
-        };
         let bus = self.tables.bus;
         let cycle = bus.cycle_ns().max(1);
+        let silent = now.saturating_sub(self.silent_since) / cycle;
+        let Some((_, masks)) = self.backup.filter(|_| {
+            self.arbiter
+                .silence(u32::try_from(silent).unwrap_or(u32::MAX))
+                == Step::TakeOver
+        }) else {
+            // Not yet (a timer that fired early) or never (a plain slave).
+            self.arm_takeover(self.silent_since);
+            return;
+        };
         let start_local = now.saturating_add(bus.slot_ns);
         let elapsed = start_local.saturating_sub(self.pos.start_local);
         let c0 = self.pos.abs_cycle + elapsed.div_ceil(cycle).max(1);
@@ -761,27 +851,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             if abs_cycle >= self.last_sync_cycle + SYNC_LOSS_CYCLES {
                 // The slot clock can no longer be trusted: stop transmitting until the
                 // next sync frame restarts the slot sequence.
-                self.next_boundary = Nanos::MAX;
-                self.window_end = 0;
-                // Frames still waiting were placed on that clock: withdraw them.
-                for (i, mb) in self.mailboxes.iter_mut().enumerate() {
-                    match mb {
-                        Loaded::Free => {}
-                        Loaded::Window {
-                            abort_requested, ..
-                        } => {
-                            if !*abort_requested {
-                                *abort_requested = true;
-                                can.abort(Mailbox(i as u8));
-                            }
-                        }
-                        _ => can.abort(Mailbox(i as u8)),
-                    }
-                }
-                if let Some((rank, _)) = self.backup {
-                    let wait = 2 * u64::from(rank) * self.tables.bus.cycle_ns();
-                    self.promote_at = self.pos.start_local.saturating_add(wait);
-                }
+                // Frames still waiting were placed on that clock: withdraw them. A
+                // master-capable module's takeover is armed from the last sync it heard.
+                self.withdraw_all(can);
                 host.event(Event::SyncLost);
                 return;
             }
@@ -838,7 +910,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     self.hrt = Some(HrtTransfer {
                         tx,
                         token,
-                        crc: TxCrc::NEW,
+                        tid: next_tid(&mut self.tx_tid, tx),
                         seq: self.hrt_seq,
                         last_loaded: false,
                     });
@@ -855,11 +927,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         };
         let payload = host.payload(x.token);
-        let crc = x.crc.advance(payload, fragment);
         let (token, seq) = (x.token, x.seq);
         let mut data = [0u8; 8];
-        let dlc = fragment_data(payload, crc, fragment, &mut data);
-        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, fragment) else {
+        let dlc = fragment_data(payload, fragment, &mut data);
+        let field = fragment_field(count, x.tid, fragment);
+        let Some(id) = CanId::new(LAXITY_HRT, topic.msg_id, field) else {
             return;
         };
         let Some(frame) = Frame::from_parts(id, dlc, data) else {
@@ -912,7 +984,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     tx,
                     token,
                     fragment,
-                    ref mut crc,
+                    ref mut tid,
                     deadline,
                 } => {
                     let Some(topic) = self.tables.tx.get(tx as usize) else {
@@ -931,10 +1003,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         }
                     };
                     let payload = host.payload(token);
-                    let crc = crc.advance(payload, fragment);
                     let mut data = [0u8; 8];
-                    let dlc = fragment_data(payload, crc, fragment, &mut data);
-                    let Some(id) = CanId::new(laxity, topic.msg_id, fragment) else {
+                    let dlc = fragment_data(payload, fragment, &mut data);
+                    // The transfer takes its ID when its first fragment is first loaded,
+                    // so two transfers of a topic loaded together get different IDs.
+                    let tid = *tid.get_or_insert_with(|| next_tid(&mut self.tx_tid, tx));
+                    let count = fragment_count(topic.size as usize);
+                    let field = fragment_field(count, tid, fragment);
+                    let Some(id) = CanId::new(laxity, topic.msg_id, field) else {
                         continue;
                     };
                     match Frame::from_parts(id, dlc, data) {
@@ -989,7 +1065,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     continue;
                 }
             }
-            if self.item_wc(&head) < remaining {
+            if self.item_wc(&head) < remaining && !waits_for_topic(&head, &self.mailboxes) {
                 return self.queue.pop();
             }
             break;
@@ -997,10 +1073,12 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if self.policy.fit_window_end {
             let wc = self.wc_ns;
             let tables = self.tables;
+            let mailboxes = &self.mailboxes;
             if let Some(found) = self.queue.pop_first_matching(|_, item| {
                 item_dlc(item, &tables)
                     .and_then(|d| wc.get(d as usize))
                     .is_some_and(|w| *w < remaining)
+                    && !waits_for_topic(item, mailboxes)
             }) {
                 return Some(found);
             }
@@ -1036,7 +1114,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     ) {
         let id = frame.id();
         if id.is_sync() {
-            self.on_sync(frame, sof, host);
+            // A bus-off controller receives nothing; a driver that still hands frames
+            // over must not relock the module before its recovery.
+            if !self.error.bus_off {
+                self.on_sync(frame, sof, can, host);
+            }
             return;
         }
         let msg = id.msg_id().0;
@@ -1087,28 +1169,38 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             RxStep::Dropped(why) => Counters::bump(match why {
                 crate::fragment::RxDrop::BadDlc => &mut self.counters.rx_bad_dlc,
                 crate::fragment::RxDrop::OutOfOrder => &mut self.counters.rx_out_of_order,
-                crate::fragment::RxDrop::Crc => &mut self.counters.rx_crc,
+                crate::fragment::RxDrop::OtherTransfer => &mut self.counters.rx_other_transfer,
                 crate::fragment::RxDrop::BadSize => &mut self.counters.rx_bad_size,
             }),
         }
         let _ = can;
     }
 
-    fn on_sync(&mut self, frame: &Frame, sof: Nanos, host: &mut impl Host) {
+    fn on_sync(
+        &mut self,
+        frame: &Frame,
+        sof: Nanos,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
         let spc = self.tables.bus.slots_per_cycle;
         let Some(sync) = parse_sync(frame, spc) else {
             Counters::bump(&mut self.counters.rx_bad_sync);
             return;
         };
-        if self.master {
-            // Another node claims mastership: count it, keep our own clock.
-            Counters::bump(&mut self.counters.rx_bad_sync);
-            return;
+        if self.arbiter.foreign_sync() == Step::Yield {
+            // Another master: step down at once and follow it; if it yielded too, the
+            // ranked takeover elects one of us (§5.6).
+            Counters::bump(&mut self.counters.master_yields);
+            self.master = false;
+            self.clock = SlotClock::slave(&self.tables.bus);
+            self.withdraw_all(can);
+            host.event(Event::SyncLost);
         }
         let was_synced = self.is_synced();
-        // A master's sync (the configured one or a higher-ranked backup) cancels a
-        // pending takeover.
-        self.promote_at = Nanos::MAX;
+        // A master's sync (the configured one or a better-ranked backup) restarts the
+        // takeover countdown.
+        self.arm_takeover(sof);
         if !self.clock.on_sync(sof, sync.cycle) {
             return;
         }
@@ -1225,7 +1317,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                             tx,
                             token,
                             fragment,
-                            crc,
+                            tid,
                             deadline,
                         },
                         r,
@@ -1241,7 +1333,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                             tx,
                             token,
                             fragment,
-                            crc,
+                            tid,
                             deadline,
                         };
                         if self.queue.push(key, next).is_err() {
@@ -1277,7 +1369,6 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             Counters::bump(&mut self.counters.queue_full);
             return Err(SubmitError::QueueFull);
         }
-        let crc = TxCrc::NEW;
         let fragment = fragment_count(payload.len()).saturating_sub(1);
         let (key, deadline) = match topic.class {
             Class::Srt => {
@@ -1293,7 +1384,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                     tx,
                     token,
                     fragment,
-                    crc,
+                    tid: None,
                     deadline,
                 },
             )
@@ -1307,9 +1398,67 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         Counters::bump(&mut self.counters.rx_overrun);
     }
 
-    /// The driver saw bus-off.
-    pub fn on_bus_off(&mut self) {
-        Counters::bump(&mut self.counters.bus_off);
+    /// The controller's fault-confinement state changed (docs/PROTOCOL.md §5.7), at local
+    /// time `now`. Entering error-passive is counted (`error_passive`); the module keeps
+    /// its slots. Entering bus-off is counted (`bus_off`) and stops the module: every
+    /// mailbox is withdrawn, a master steps down, `Event::SyncLost` is reported, and
+    /// nothing is sent — not even a takeover — until the driver reports the recovery;
+    /// then the module rejoins like a slave (two syncs) or, master-capable, listens
+    /// first (§5.6).
+    pub fn on_error_state(
+        &mut self,
+        now: Nanos,
+        state: ErrorState,
+        can: &mut impl Controller,
+        host: &mut impl Host,
+    ) {
+        let (was, is) = (self.error.level(), state.level());
+        self.error = state;
+        match (was, is) {
+            (Level::Active, Level::Passive) => Counters::bump(&mut self.counters.error_passive),
+            (Level::Active | Level::Passive, Level::BusOff) => {
+                Counters::bump(&mut self.counters.bus_off);
+                self.stall(now, can, host);
+            }
+            // Recovered: listen again from now.
+            (Level::BusOff, _) => self.arm_takeover(now),
+            _ => {}
+        }
+    }
+
+    /// Last fault-confinement state reported by the driver (TEC, REC, bus-off); the
+    /// entry counts are `counters().error_passive` and `counters().bus_off`.
+    pub fn error_state(&self) -> ErrorState {
+        self.error
+    }
+}
+
+/// True for a transfer not started yet (no transfer ID) whose topic has a frame in a
+/// mailbox: it must wait, or the two transfers' fragments would interleave on the wire
+/// and receivers would drop both (docs/PROTOCOL.md §7.1). Scans the mailboxes only for
+/// a transfer not started yet.
+fn waits_for_topic(item: &Item, mailboxes: &[Loaded; MAILBOXES]) -> bool {
+    let Item::Topic { tx, tid: None, .. } = *item else {
+        return false;
+    };
+    mailboxes.iter().any(|m| match m {
+        Loaded::Window {
+            item: Item::Topic { tx: other, .. },
+            ..
+        } => *other == tx,
+        _ => false,
+    })
+}
+
+/// Takes the next transfer ID of topic `tx` (wrapping: the field keeps its low bits).
+fn next_tid(tx_tid: &mut [u8; 256], tx: u8) -> u8 {
+    match tx_tid.get_mut(usize::from(tx)) {
+        Some(t) => {
+            let id = *t;
+            *t = t.wrapping_add(1);
+            id
+        }
+        None => 0, // unreachable: 256 entries for a u8 index
     }
 }
 

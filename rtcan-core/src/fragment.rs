@@ -1,25 +1,25 @@
-//! Fragmentation and reassembly (docs/PROTOCOL.md §7). OWNER: codec helper. Signatures fixed.
+//! Fragmentation and reassembly (docs/PROTOCOL.md §7). OWNER: codec helper.
 //!
-//! A message of `n` bytes travels as `fragment_count(n)` frames with a count-down counter in
-//! `ID[6:0]`; messages longer than one frame end with a CRC-16 of the payload so that a
-//! receiver never delivers frames of two transmissions glued together.
+//! A message of `n` bytes travels as `fragment_count(n)` frames. The 7-bit fragment field
+//! `ID[6:0]` of a multi-frame message holds a count-down counter in its low
+//! `counter_bits(count)` bits and, in the bits above, a transfer ID that the sender
+//! increments for every transfer of the topic: every fragment names its transfer, so a
+//! receiver never glues frames of two transfers together (docs/PROTOCOL.md §7.4 — by
+//! construction, not by CRC chance; there is no transfer CRC).
 use crate::frame::Frame;
 use crate::time::Nanos;
 
-/// Most frames in one message (7-bit count-down counter).
-pub const MAX_FRAGMENTS: usize = 128;
-/// Largest payload: 128 frames x 8 bytes minus the 2-byte CRC of multi-frame messages.
-pub const MAX_PAYLOAD: usize = MAX_FRAGMENTS * 8 - 2;
-/// Bytes of the transfer CRC appended to multi-frame messages.
-pub const CRC_LEN: usize = 2;
+/// Most frames in one message: a 5-bit counter leaves at least 2 transfer-ID bits.
+pub const MAX_FRAGMENTS: usize = 32;
+/// Largest payload: 32 frames x 8 bytes.
+pub const MAX_PAYLOAD: usize = MAX_FRAGMENTS * 8;
+/// Width of the fragment field `ID[6:0]`.
+pub const FIELD_BITS: u8 = 7;
 
-/// Bytes on the wire for a payload: multi-frame messages carry a CRC-16 at the end.
+/// Bytes on the wire for a payload: the payload itself (no transfer CRC). The one place
+/// that says so: the model sizes reassembly buffers and bus load from it.
 pub const fn wire_len(payload: usize) -> usize {
-    if payload > 8 {
-        payload + CRC_LEN
-    } else {
-        payload
-    }
+    payload
 }
 
 /// Number of frames for a payload (at least 1). Payloads above `MAX_PAYLOAD` give a count
@@ -35,6 +35,56 @@ pub const fn fragment_count(payload: usize) -> u8 {
     }
 }
 
+/// Bits of the fragment field that hold the counter for a message of `count` frames:
+/// 0 for a single frame, else `ceil(log2(count))` (2 frames: 1 bit, 3-4: 2, 5-8: 3,
+/// 9-16: 4, 17-32: 5). Above `MAX_FRAGMENTS` the whole field.
+pub const fn counter_bits(count: u8) -> u8 {
+    if count <= 1 {
+        return 0;
+    }
+    if count as usize > MAX_FRAGMENTS {
+        return FIELD_BITS;
+    }
+    (u8::BITS - (count - 1).leading_zeros()) as u8
+}
+
+/// Transfer-ID bits of a message of `count` frames: the field bits the counter leaves
+/// (6 for 2 frames … 2 for 17-32 frames); 0 for a single frame, which cannot be mixed.
+pub const fn transfer_id_bits(count: u8) -> u8 {
+    if count <= 1 {
+        0
+    } else {
+        FIELD_BITS - counter_bits(count)
+    }
+}
+
+/// The fragment field `ID[6:0]` of fragment `counter` of transfer `tid` (taken modulo
+/// `2^transfer_id_bits(count)`) of a message of `count` frames.
+pub const fn fragment_field(count: u8, tid: u8, counter: u8) -> u8 {
+    let k = counter_bits(count);
+    let t = transfer_id_bits(count);
+    let tid = tid & ((1u8 << t) - 1);
+    ((tid << k) | counter) & 0x7F
+}
+
+/// Splits a received fragment field into (transfer ID, counter) for a message of `count`
+/// frames. The counter may be `>= count` (garbage the receiver drops).
+pub const fn split_field(count: u8, field: u8) -> (u8, u8) {
+    let field = field & 0x7F;
+    let k = counter_bits(count);
+    // A single frame carries no transfer ID: its whole field is the counter (0).
+    if count <= 1 || k >= FIELD_BITS {
+        return (0, field);
+    }
+    (field >> k, field & ((1u8 << k) - 1))
+}
+
+/// The count-down counter carried by fragment field `field` of a message of `size` bytes
+/// (for tools that read frames off the wire: the last fragment has counter 0).
+pub const fn counter_of(size: usize, field: u8) -> u8 {
+    split_field(fragment_count(size), field).1
+}
+
 /// DLC of the fragment with count-down `counter` in a message of `payload` bytes; `None`
 /// if the message has no such fragment.
 pub const fn fragment_dlc(payload: usize, counter: u8) -> Option<u8> {
@@ -47,62 +97,11 @@ pub const fn fragment_dlc(payload: usize, counter: u8) -> Option<u8> {
     Some(if left > 8 { 8 } else { left as u8 })
 }
 
-/// Initial value of the transfer CRC register.
-pub const CRC16_INIT: u16 = 0xFFFF;
-
-/// Transfer CRC of multi-frame messages: CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF,
-/// no reflection, xorout 0; check value 0x29B1 for "123456789"). Sent little-endian.
-pub fn crc16(data: &[u8]) -> u16 {
-    crc16_update(CRC16_INIT, data)
-}
-
-/// Continues a CRC-16/CCITT-FALSE over `data` (start from `CRC16_INIT`). Lets a sender or
-/// receiver spread the CRC over the fragments (8 bytes per frame) instead of one pass over
-/// up to 1022 bytes in an interrupt handler: a sender that updates the CRC with each
-/// fragment's payload bytes before building that fragment has the complete CRC by the
-/// time a fragment carries CRC bytes.
-pub fn crc16_update(mut crc: u16, data: &[u8]) -> u16 {
-    for &byte in data {
-        let idx = usize::from((crc >> 8) as u8 ^ byte);
-        // idx < 256: the lookup cannot miss.
-        crc = (crc << 8) ^ CRC16_TABLE.get(idx).copied().unwrap_or(0);
-    }
-    crc
-}
-
-/// Byte-wise table of the CRC-16 generator 0x1021 (512 bytes of flash, built at compile
-/// time): 8 times fewer steps than the bitwise loop.
-// `static`, not `const`: a const array indexed at run time may be copied to the stack on
-// every call. Immutable data, not state.
-static CRC16_TABLE: [u16; 256] = crc16_table();
-
-// `i < 256` is the loop bound: the index cannot panic (const fn cannot use get_mut).
-#[allow(clippy::indexing_slicing)]
-const fn crc16_table() -> [u16; 256] {
-    let mut table = [0u16; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = (i as u16) << 8;
-        let mut k = 0;
-        while k < 8 {
-            c = if c & 0x8000 != 0 {
-                (c << 1) ^ 0x1021
-            } else {
-                c << 1
-            };
-            k += 1;
-        }
-        table[i] = c;
-        i += 1;
-    }
-    table
-}
-
 /// Writes the data of fragment `counter` (count-down: first = fragment_count-1, last = 0)
-/// of `payload` (whose transfer CRC is `crc`) into `out`; returns the DLC.
-/// A counter the message does not have, or a payload above `MAX_PAYLOAD`, gives DLC 0 and
-/// zeroed `out` (the engine only asks for fragments of its own topics).
-pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -> u8 {
+/// of `payload` into `out`; returns the DLC. A counter the message does not have, or a
+/// payload above `MAX_PAYLOAD`, gives DLC 0 and zeroed `out` (the engine only asks for
+/// fragments of its own topics).
+pub fn fragment_data(payload: &[u8], counter: u8, out: &mut [u8; 8]) -> u8 {
     // This runs on every frame the engine loads (slot handler, TX interrupt): whole
     // chunks are one 8-byte move, the tail is packed into a word; no variable-size copy
     // (a `memcpy` call costs more than the rest of this function on Cortex-M3).
@@ -120,20 +119,9 @@ pub fn fragment_data(payload: &[u8], crc: u16, counter: u8, out: &mut [u8; 8]) -
         *out = *chunk;
         return 8;
     }
-    // Tail: what is left of the payload, then (multi-frame messages) the CRC,
-    // little-endian; a fragment may also start inside the CRC.
     let rest = payload.get(start..).unwrap_or(&[]);
-    let mut word = pack_le(rest);
-    if len > 8 {
-        word |= match start.checked_sub(len) {
-            None => u64::from(crc)
-                .checked_shl(8 * rest.len() as u32)
-                .unwrap_or(0),
-            Some(k) => u64::from(crc) >> (8 * k.min(2)),
-        };
-    }
-    *out = word.to_le_bytes();
-    (wire_len(len) - start).min(8) as u8
+    *out = pack_le(rest).to_le_bytes();
+    rest.len().min(8) as u8
 }
 
 /// Up to 8 bytes as a little-endian word (bytes past the slice are zero).
@@ -153,8 +141,9 @@ pub enum RxDrop {
     BadDlc,
     /// Counter not the expected one (lost or out-of-order frame); transfer discarded.
     OutOfOrder,
-    /// Reassembled bytes fail the transfer CRC (frames of two transmissions mixed).
-    Crc,
+    /// The expected counter, but the transfer ID of another transfer (the rest of this
+    /// transfer and the start of that one were lost): transfer discarded, nothing mixed.
+    OtherTransfer,
     /// Configuration error, not a bus error: topic size above `MAX_PAYLOAD` or buffer
     /// shorter than `wire_len(size)`.
     BadSize,
@@ -164,10 +153,9 @@ pub enum RxDrop {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RxState {
     next: Option<u8>,
+    /// Transfer ID of the transfer in progress.
+    tid: u8,
     first_sof: Nanos,
-    /// CRC of the payload bytes received so far (updated per fragment, so the last
-    /// fragment costs 8 bytes of CRC, not the whole message).
-    crc: u16,
 }
 
 /// Result of feeding one frame.
@@ -178,7 +166,7 @@ pub enum RxStep<'b> {
     /// More fragments expected, and this first fragment discarded an unfinished transfer
     /// (its tail was lost, e.g. the sender dropped it at its deadline).
     Restarted,
-    /// Message complete: payload (CRC checked and stripped) and the first frame's SOF.
+    /// Message complete: payload and the first frame's SOF.
     Complete(&'b [u8], Nanos),
     /// Frame dropped (and any partial transfer discarded).
     Dropped(RxDrop),
@@ -197,15 +185,19 @@ impl RxState {
         sof: Nanos,
     ) -> RxStep<'b> {
         let partial = self.next.take();
-        let wire = wire_len(size);
-        if size > MAX_PAYLOAD || buf.len() < wire {
+        if size > MAX_PAYLOAD || buf.len() < wire_len(size) {
             return RxStep::Dropped(RxDrop::BadSize);
         }
         let count = fragment_count(size);
-        let counter = frame.id().fragment();
+        let (tid, counter) = split_field(count, frame.id().fragment());
         let first = counter == count - 1;
-        if !first && partial != Some(counter) {
-            return RxStep::Dropped(RxDrop::OutOfOrder);
+        if !first {
+            if partial != Some(counter) {
+                return RxStep::Dropped(RxDrop::OutOfOrder);
+            }
+            if tid != self.tid {
+                return RxStep::Dropped(RxDrop::OtherTransfer);
+            }
         }
         if fragment_dlc(size, counter) != Some(frame.dlc()) {
             return RxStep::Dropped(RxDrop::BadDlc);
@@ -231,15 +223,7 @@ impl RxState {
         }
         if first {
             self.first_sof = sof;
-            self.crc = CRC16_INIT;
-        }
-        // Payload bytes of this fragment (the CRC bytes at the end are not covered);
-        // single-frame messages carry no CRC, so they skip it.
-        let payload_end = (start + data.len()).min(size);
-        if size > 8 {
-            if let Some(part) = buf.get(start..payload_end) {
-                self.crc = crc16_update(self.crc, part);
-            }
+            self.tid = tid;
         }
         if counter > 0 {
             self.next = Some(counter - 1);
@@ -249,19 +233,10 @@ impl RxState {
                 RxStep::Pending
             };
         }
-        let Some((payload, tail)) = buf.split_at_mut_checked(size) else {
-            return RxStep::Dropped(RxDrop::BadSize); // unreachable: size checked above
-        };
-        if count > 1 {
-            let sent = match tail {
-                [lo, hi, ..] => u16::from_le_bytes([*lo, *hi]),
-                _ => return RxStep::Dropped(RxDrop::BadSize), // unreachable: size checked above
-            };
-            if self.crc != sent {
-                return RxStep::Dropped(RxDrop::Crc);
-            }
+        match buf.get(..size) {
+            Some(payload) => RxStep::Complete(payload, self.first_sof),
+            None => RxStep::Dropped(RxDrop::BadSize), // unreachable: size checked above
         }
-        RxStep::Complete(payload, self.first_sof)
     }
 
     /// True while a multi-frame transfer is partly received.
@@ -275,50 +250,63 @@ mod tests {
     use super::*;
     use crate::id::{CanId, MsgId};
 
-    fn frames(payload: &[u8]) -> Vec<Frame> {
-        let crc = crc16(payload);
-        (0..fragment_count(payload.len()))
+    fn frames_tid(payload: &[u8], tid: u8) -> Vec<Frame> {
+        let count = fragment_count(payload.len());
+        (0..count)
             .rev()
             .map(|c| {
                 let mut out = [0; 8];
-                let dlc = fragment_data(payload, crc, c, &mut out);
-                Frame::from_parts(CanId::new(0, MsgId(0x140), c).unwrap(), dlc, out).unwrap()
+                let dlc = fragment_data(payload, c, &mut out);
+                let field = fragment_field(count, tid, c);
+                Frame::from_parts(CanId::new(0, MsgId(0x140), field).unwrap(), dlc, out).unwrap()
             })
             .collect()
     }
 
-    /// The bitwise definition, to check the table.
-    fn crc16_bitwise(data: &[u8]) -> u16 {
-        let mut crc: u16 = 0xFFFF;
-        for &byte in data {
-            crc ^= u16::from(byte) << 8;
-            for _ in 0..8 {
-                crc = if crc & 0x8000 != 0 {
-                    (crc << 1) ^ 0x1021
-                } else {
-                    crc << 1
-                };
-            }
-        }
-        crc
+    fn frames(payload: &[u8]) -> Vec<Frame> {
+        frames_tid(payload, 0)
     }
 
     #[test]
-    fn crc16_check_value() {
-        assert_eq!(crc16(b"123456789"), 0x29B1);
-        assert_eq!(crc16_bitwise(b"123456789"), 0x29B1);
-        assert_eq!(crc16(&[]), 0xFFFF);
-        let data: Vec<u8> = (0..=255u8).chain((0..=255u8).rev()).collect();
-        assert_eq!(crc16(&data), crc16_bitwise(&data));
-        for b in 0..=255u8 {
-            assert_eq!(crc16(&[b]), crc16_bitwise(&[b]));
-        }
-        // Incremental = one pass, wherever the split.
-        for cut in 0..data.len() {
-            assert_eq!(
-                crc16_update(crc16(&data[..cut]), &data[cut..]),
-                crc16(&data)
-            );
+    fn field_layout() {
+        let bits: Vec<(u8, u8)> = [1u8, 2, 3, 4, 5, 8, 9, 16, 17, 32]
+            .iter()
+            .map(|&c| (counter_bits(c), transfer_id_bits(c)))
+            .collect();
+        assert_eq!(
+            bits,
+            [
+                (0, 0),
+                (1, 6),
+                (2, 5),
+                (2, 5),
+                (3, 4),
+                (3, 4),
+                (4, 3),
+                (4, 3),
+                (5, 2),
+                (5, 2)
+            ]
+        );
+        assert_eq!(counter_bits(33), 7);
+        assert_eq!(transfer_id_bits(33), 0);
+        // 3 frames, transfer 5: 5 << 2 | counter.
+        assert_eq!(fragment_field(3, 5, 2), 0x16);
+        assert_eq!(fragment_field(3, 5, 0), 0x14);
+        assert_eq!(split_field(3, 0x16), (5, 2));
+        // Transfer IDs wrap at 2^bits; single frames carry none.
+        assert_eq!(fragment_field(3, 32 + 5, 1), fragment_field(3, 5, 1));
+        assert_eq!(fragment_field(1, 9, 0), 0);
+        assert_eq!(split_field(1, 3), (0, 3));
+        assert_eq!(counter_of(20, 0x14), 0);
+        for count in 1..=MAX_FRAGMENTS as u8 {
+            for tid in 0..=255u8 {
+                for c in 0..count {
+                    let f = fragment_field(count, tid, c);
+                    let t = tid & ((1u16 << transfer_id_bits(count)) - 1) as u8;
+                    assert_eq!(split_field(count, f), (t, c));
+                }
+            }
         }
     }
 
@@ -326,14 +314,14 @@ mod tests {
     fn counts_and_dlcs() {
         assert_eq!(fragment_count(0), 1);
         assert_eq!(fragment_count(8), 1);
-        assert_eq!(fragment_count(9), 2); // 11 wire bytes
-        assert_eq!(fragment_count(14), 2); // 16 wire bytes
-        assert_eq!(fragment_count(15), 3); // 17 wire bytes
-        assert_eq!(fragment_count(MAX_PAYLOAD), 128);
-        assert_eq!(fragment_count(MAX_PAYLOAD + 1), 129);
+        assert_eq!(fragment_count(9), 2);
+        assert_eq!(fragment_count(16), 2);
+        assert_eq!(fragment_count(17), 3);
+        assert_eq!(fragment_count(MAX_PAYLOAD), 32);
+        assert_eq!(fragment_count(MAX_PAYLOAD + 1), 33);
         assert_eq!(fragment_dlc(0, 0), Some(0));
         assert_eq!(fragment_dlc(9, 1), Some(8));
-        assert_eq!(fragment_dlc(9, 0), Some(3));
+        assert_eq!(fragment_dlc(9, 0), Some(1));
         assert_eq!(fragment_dlc(9, 2), None);
         assert_eq!(fragment_dlc(MAX_PAYLOAD + 1, 0), None);
     }
@@ -341,7 +329,7 @@ mod tests {
     #[test]
     fn fragment_data_out_of_range_counter_is_empty() {
         let mut out = [0xAA; 8];
-        assert_eq!(fragment_data(&[1, 2, 3], 0, 1, &mut out), 0);
+        assert_eq!(fragment_data(&[1, 2, 3], 1, &mut out), 0);
         assert_eq!(out, [0; 8]);
     }
 
@@ -349,7 +337,7 @@ mod tests {
     fn lost_middle_fragment_is_out_of_order() {
         let p: Vec<u8> = (0..20).collect();
         let f = frames(&p);
-        let mut buf = [0u8; 22];
+        let mut buf = [0u8; 20];
         let mut rx = RxState::default();
         assert_eq!(rx.step(&mut buf, 20, &f[0], 1), RxStep::Pending);
         assert_eq!(
@@ -370,7 +358,7 @@ mod tests {
     fn restart_discards_partial() {
         let p: Vec<u8> = (0..20).collect();
         let f = frames(&p);
-        let mut buf = [0u8; 22];
+        let mut buf = [0u8; 20];
         let mut rx = RxState::default();
         assert_eq!(rx.step(&mut buf, 20, &f[0], 1), RxStep::Pending);
         assert_eq!(rx.step(&mut buf, 20, &f[0], 5), RxStep::Restarted);
@@ -382,13 +370,14 @@ mod tests {
     fn wrong_dlc_and_counter_beyond_count() {
         let p = [7u8; 20];
         let f = frames(&p);
-        let mut buf = [0u8; 22];
+        let mut buf = [0u8; 20];
         let mut rx = RxState::default();
         let short = Frame::new(f[0].id(), &[7; 7]).unwrap();
         assert_eq!(
             rx.step(&mut buf, 20, &short, 0),
             RxStep::Dropped(RxDrop::BadDlc)
         );
+        // 3 frames use a 2-bit counter: counter 3 does not exist.
         let beyond = Frame::new(CanId::new(0, MsgId(0x140), 3).unwrap(), &[7; 8]).unwrap();
         assert_eq!(
             rx.step(&mut buf, 20, &beyond, 0),
@@ -403,23 +392,31 @@ mod tests {
             rx.step(&mut buf, 2, &single, 4),
             RxStep::Complete(&[1, 2][..], 4)
         );
+        // A single frame with a non-zero field is garbage.
+        let odd = Frame::new(CanId::new(0, MsgId(0x140), 1).unwrap(), &[1, 2]).unwrap();
+        assert_eq!(
+            rx.step(&mut buf, 2, &odd, 4),
+            RxStep::Dropped(RxDrop::OutOfOrder)
+        );
     }
 
     #[test]
-    fn bad_crc_is_dropped() {
-        let p: Vec<u8> = (0..20).collect();
-        let mut f = frames(&p);
-        let mut d = *f[1].raw_data();
-        d[0] ^= 1;
-        f[1] = Frame::from_parts(f[1].id(), 8, d).unwrap();
-        let mut buf = [0u8; 22];
+    fn other_transfer_is_dropped() {
+        let a: Vec<u8> = (0..20).collect();
+        let b: Vec<u8> = (100..120).collect();
+        let fa = frames_tid(&a, 0);
+        let fb = frames_tid(&b, 1);
+        let mut buf = [0u8; 20];
         let mut rx = RxState::default();
-        for fr in &f[..2] {
-            assert_eq!(rx.step(&mut buf, 20, fr, 0), RxStep::Pending);
-        }
+        assert_eq!(rx.step(&mut buf, 20, &fa[0], 0), RxStep::Pending);
         assert_eq!(
-            rx.step(&mut buf, 20, &f[2], 0),
-            RxStep::Dropped(RxDrop::Crc)
+            rx.step(&mut buf, 20, &fb[1], 0),
+            RxStep::Dropped(RxDrop::OtherTransfer)
+        );
+        assert!(!rx.in_progress());
+        assert_eq!(
+            rx.step(&mut buf, 20, &fb[2], 0),
+            RxStep::Dropped(RxDrop::OutOfOrder)
         );
     }
 
@@ -428,7 +425,7 @@ mod tests {
         let f = frames(&[0; 20]);
         let mut rx = RxState::default();
         assert_eq!(
-            rx.step(&mut [0u8; 21], 20, &f[0], 0),
+            rx.step(&mut [0u8; 19], 20, &f[0], 0),
             RxStep::Dropped(RxDrop::BadSize)
         );
         assert_eq!(

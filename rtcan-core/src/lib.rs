@@ -16,8 +16,10 @@
 )]
 
 pub mod admission;
+pub mod arbiter;
 pub mod calendar;
 pub mod clock;
+pub mod confinement;
 pub mod counters;
 pub mod driver;
 pub mod engine;

@@ -255,7 +255,7 @@ fn srt_fragmented_message_is_delivered_in_a_free_window_only() {
         .done
         .iter()
         .any(|d| d.0 == 3 && d.2 == TxOutcome::Sent));
-    // Three fragments (20 B + CRC = 22 B), counting down, SRT laxity 1..=62, all inside
+    // Three fragments (20 B), counting down (first transfer: ID 0), SRT laxity 1..=62, all inside
     // free slots and finished before the next reserved slot.
     let mask = p.tables[0].master_masks[0];
     let frags: Vec<_> = bus
@@ -272,7 +272,7 @@ fn srt_fragmented_message_is_delivered_in_a_free_window_only() {
     );
     assert_eq!(
         frags.iter().map(|w| w.frame.dlc()).collect::<Vec<_>>(),
-        vec![8, 8, 6]
+        vec![8, 8, 4]
     );
     for w in &frags {
         assert!((1..=62).contains(&w.frame.id().laxity()));
@@ -511,8 +511,8 @@ fn hrt_slot_with_nothing_to_send_is_reported() {
 }
 
 #[test]
-fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_crc() {
-    // Master publishes a 30-byte HRT message (32 wire bytes, 4 fragments) in slots
+fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_transfer_id() {
+    // Master publishes a 30-byte HRT message (4 fragments) in slots
     // 10..=13 of every cycle; a slave receives it.
     let size = 30u16;
     let tx: &'static [TxTopic] = Box::leak(Box::new([TxTopic {
@@ -580,23 +580,14 @@ fn fragmented_hrt_message_goes_in_consecutive_slots_with_its_crc() {
     for (i, w) in frames.iter().enumerate() {
         let (_, slot) = slot_of(w.sof + 1_000);
         assert_eq!(slot, 10 + (i % 4) as u64);
-        assert_eq!(w.frame.id().fragment(), 3 - (i % 4) as u8);
+        // 4 frames: 2 counter bits, the transfer ID above them, one more per transfer.
+        assert_eq!(
+            w.frame.id().fragment(),
+            ((i / 4) as u8) << 2 | (3 - (i % 4) as u8)
+        );
     }
-    // Last fragment: payload bytes 24..30 then the CRC-16 (little-endian) of the payload.
-    let crc = rtcan_core::fragment::crc16(&payload).to_le_bytes();
-    assert_eq!(
-        frames[3].frame.data(),
-        &[
-            payload[24],
-            payload[25],
-            payload[26],
-            payload[27],
-            payload[28],
-            payload[29],
-            crc[0],
-            crc[1]
-        ]
-    );
+    // Last fragment: payload bytes 24..30, nothing else.
+    assert_eq!(frames[3].frame.data(), &payload[24..30]);
     let got: Vec<_> = b.nodes[1]
         .host
         .delivered

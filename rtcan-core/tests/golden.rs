@@ -4,7 +4,8 @@
 
 use proptest::prelude::*;
 use rtcan_core::fragment::{
-    crc16, fragment_count, fragment_data, wire_len, RxState, RxStep, MAX_PAYLOAD,
+    counter_bits, fragment_count, fragment_data, fragment_field, transfer_id_bits, wire_len,
+    RxDrop, RxState, RxStep, MAX_PAYLOAD,
 };
 use rtcan_core::heartbeat::{heartbeat_frame, parse_heartbeat, Heartbeat};
 use rtcan_core::id::{CanId, MsgId};
@@ -191,43 +192,50 @@ fn s6_laxity() {
     assert_eq!(id(lin.encode(450_000).unwrap(), 0x0141, 2), 0x0280_A082);
 }
 
-// §7.5 a 20-byte message 00 01 .. 13 on HRT topic 0x0140.
+// §7.5 a 20-byte message 00 01 .. 13 on HRT topic 0x0140, transfer ID 5.
 #[test]
 fn s7_fragment_example() {
     let p: Vec<u8> = (0..20).collect();
-    assert_eq!(crc16(&p), 0x5A74);
-    assert_eq!(crc16(b"123456789"), 0x29B1);
-    assert_eq!((wire_len(20), fragment_count(20)), (22, 3));
+    assert_eq!((wire_len(20), fragment_count(20)), (20, 3));
+    assert_eq!((counter_bits(3), transfer_id_bits(3)), (2, 5));
     assert_eq!((wire_len(8), fragment_count(8)), (8, 1));
-    assert_eq!((wire_len(9), fragment_count(9)), (11, 2));
+    assert_eq!((wire_len(9), fragment_count(9)), (9, 2));
+    assert_eq!((wire_len(16), fragment_count(16)), (16, 2));
     assert_eq!(
         (wire_len(MAX_PAYLOAD), fragment_count(MAX_PAYLOAD)),
-        (1024, 128)
+        (256, 32)
     );
+    let bits: Vec<u8> = [2u8, 4, 8, 16, 32]
+        .iter()
+        .map(|&c| transfer_id_bits(c))
+        .collect();
+    assert_eq!(bits, [6, 5, 4, 3, 2]);
     let expect: [(u32, &[u8]); 3] = [
         (
-            0x0000_A002,
+            0x0000_A016,
             &[0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07],
         ),
         (
-            0x0000_A001,
+            0x0000_A015,
             &[0x08, 0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F],
         ),
-        (0x0000_A000, &[0x10, 0x11, 0x12, 0x13, 0x74, 0x5A]),
+        (0x0000_A014, &[0x10, 0x11, 0x12, 0x13]),
     ];
     let mut rx = RxState::default();
-    let mut buf = [0u8; 22];
+    let mut buf = [0u8; 20];
+    let mut sent = Vec::new();
     for (k, (raw, data)) in expect.iter().enumerate() {
         let counter = 2 - k as u8;
         let mut out = [0; 8];
-        let dlc = fragment_data(&p, crc16(&p), counter, &mut out);
+        let dlc = fragment_data(&p, counter, &mut out);
         assert_eq!(&out[..dlc as usize], *data);
         let f = Frame::new(
-            CanId::new(0, MsgId(0x0140), counter).unwrap(),
+            CanId::new(0, MsgId(0x0140), fragment_field(3, 5, counter)).unwrap(),
             &out[..dlc as usize],
         )
         .unwrap();
         assert_eq!(f.id().raw(), *raw);
+        sent.push(f);
         let r = rx.step(&mut buf, 20, &f, 100 + k as u64);
         if counter > 0 {
             assert_eq!(r, RxStep::Pending);
@@ -235,6 +243,18 @@ fn s7_fragment_example() {
             assert_eq!(r, RxStep::Complete(&p[..], 100));
         }
     }
+    // The next transfer (ID 6) starts 0x0000A01A; its 2nd fragment after transfer 5's
+    // first is dropped as another transfer's.
+    assert_eq!(id(0, 0x0140, fragment_field(3, 6, 2)), 0x0000_A01A);
+    assert_eq!(id(0, 0x0140, fragment_field(3, 6, 1)), 0x0000_A019);
+    let next = Frame::new(CanId::from_raw(0x0000_A019).unwrap(), &[0; 8]).unwrap();
+    assert_eq!(rx.step(&mut buf, 20, &sent[0], 0), RxStep::Pending);
+    assert_eq!(
+        rx.step(&mut buf, 20, &next, 0),
+        RxStep::Dropped(RxDrop::OtherTransfer)
+    );
+    // Transfer ID 37 on 5 bits is 5 again.
+    assert_eq!(fragment_field(3, 37, 2), 0x16);
 }
 
 // §9 heartbeat example.

@@ -222,8 +222,7 @@ impl ModuleTables {
         }
     }
 
-    /// Bytes of reassembly arena the receive topics need (multi-frame messages carry their
-    /// transfer CRC, `wire_len`).
+    /// Bytes of reassembly arena the receive topics need (`wire_len`: the payload).
     pub fn arena_bytes(&self) -> usize {
         self.rx
             .iter()

@@ -367,7 +367,7 @@ fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
                     e.key
                 ),
             )
-            .note("128 fragments of 8 bytes, less the 2-byte transfer CRC"),
+            .note("32 fragments of 8 bytes: the fragment field keeps 2 bits for the transfer ID"),
         );
     }
     MsgType {

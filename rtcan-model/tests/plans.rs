@@ -66,7 +66,7 @@ fn paper_reproduces_fig3() {
     assert_eq!(p.master_masks, vec![expected]);
     assert_eq!(expected.count_ones(), 40);
     assert_eq!(p.reserved_slots(), 39);
-    // 45 SRT topics, deadlines from Table 2, 16 and 20 bytes need 3 frames each.
+    // 45 SRT topics, deadlines from Table 2; 16 bytes take 2 frames, 20 bytes 3.
     assert_eq!(
         p.topics.iter().filter(|t| t.class == Class::Srt).count(),
         45
@@ -74,7 +74,7 @@ fn paper_reproduces_fig3() {
     let sb = p.topic("s_b2_3").unwrap();
     assert_eq!(
         (sb.size, sb.fragments, sb.deadline_ns),
-        (16, 3, Some(10_000_000))
+        (16, 2, Some(10_000_000))
     );
     assert_eq!(p.topic("s_c3_5").unwrap().fragments, 3);
     // One receiver set (the capture module): 54 topics in one 64-ID block, one mask.
@@ -111,8 +111,8 @@ fn triskar2_plan() {
     assert_eq!(p.bus.cycle_counter_wrap, 32768);
     assert_eq!(p.module("gateway").map(|m| m.is_master), Some(true));
     let expect = [
-        ("odometry", 0x140, Some((120, 5, 4))),
-        ("proximity", 0x141, Some((240, 9, 1))),
+        ("odometry", 0x140, Some((120, 5, 3))),
+        ("proximity", 0x141, Some((240, 8, 1))),
         ("battery", 0x142, None),
         ("log", 0x143, None),
         ("encoder1", 0x144, Some((30, 1, 1))),
@@ -142,11 +142,11 @@ fn triskar2_plan() {
         p.topic("encoder1").unwrap().actual_period_ns(&p.bus),
         Some(4_999_980)
     );
-    // Reserved: per 240-slot hyperperiod 8+8 (encoders) + 8 (setpoints: 4 x 2) + 8 (odometry 2 x 4) + 1.
-    assert_eq!(p.reserved_slots(), 33);
+    // Reserved: per 240-slot hyperperiod 8+8 (encoders) + 8 (setpoints: 4 x 2) + 6 (odometry 2 x 3) + 1.
+    assert_eq!(p.reserved_slots(), 31);
     assert_eq!(
         p.master_masks,
-        vec![0x1_8000_03ff, 0x1_8000_001f, 0x1_8000_01ff, 0x1_8000_001f]
+        vec![0x1_8000_01ff, 0x1_8000_001f, 0x1_8000_00ff, 0x1_8000_001f]
     );
     assert_eq!(p.module("gateway").unwrap().banks[2].filter, mask(0x140, 4));
     let m2 = p.module("motor2").unwrap();

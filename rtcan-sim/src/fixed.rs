@@ -13,7 +13,7 @@
 //! is a driver defect, not a property of fixed-priority CAN; with it the response
 //! times obey the classical analysis (Davis, Burns, Bril, Lukkien 2007; `rta`).
 use rtcan_core::driver::{Mailbox, Token, TxResult, MAILBOXES};
-use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
+use rtcan_core::fragment::{fragment_count, fragment_data};
 use rtcan_core::timing::worst_case_ns;
 use rtcan_core::{CanId, Class, Controller, Frame, Host, Nanos};
 
@@ -28,7 +28,6 @@ struct Msg {
     prio: u8,
     tx: u8,
     token: Token,
-    crc: u16,
     next_fragment: u8,
     deadline: Nanos,
     loaded: Option<usize>,
@@ -151,14 +150,12 @@ impl<'t> FixedNode<'t> {
 
     fn enqueue(&mut self, tx: u8, token: Token, deadline: Nanos) {
         let payload = self.host.payload(token);
-        let crc = if payload.len() > 8 { crc16(payload) } else { 0 };
         let next_fragment = fragment_count(payload.len()).saturating_sub(1);
         let prio = self.prio(tx);
         self.queue.push(Msg {
             prio,
             tx,
             token,
-            crc,
             next_fragment,
             deadline,
             loaded: None,
@@ -198,12 +195,7 @@ impl<'t> FixedNode<'t> {
                 break;
             };
             let mut data = [0u8; 8];
-            let dlc = fragment_data(
-                self.host.payload(m.token),
-                m.crc,
-                m.next_fragment,
-                &mut data,
-            );
+            let dlc = fragment_data(self.host.payload(m.token), m.next_fragment, &mut data);
             let (Some(id), true) = (CanId::new(m.prio, topic.msg_id, m.next_fragment), true) else {
                 break;
             };

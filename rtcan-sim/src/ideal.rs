@@ -15,7 +15,7 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use rtcan_core::fragment::{crc16, fragment_count, fragment_data};
+use rtcan_core::fragment::{fragment_count, fragment_data};
 use rtcan_core::timing::{bits_to_ns, exact_bits, INTERMISSION_BITS};
 use rtcan_core::{CanId, Class, Frame, Nanos};
 
@@ -37,12 +37,11 @@ struct Msg {
 fn frames_of(t: &TopicInfo, seq: u32, bitrate: u32, ifs: Nanos) -> Vec<(Frame, Nanos)> {
     let mut payload = vec![0u8; t.size];
     fill_payload(&mut payload, seq, t.node as u8, t.tx);
-    let crc = if t.size > 8 { crc16(&payload) } else { 0 };
     (0..fragment_count(t.size))
         .rev()
         .filter_map(|c| {
             let mut data = [0u8; 8];
-            let dlc = fragment_data(&payload, crc, c, &mut data);
+            let dlc = fragment_data(&payload, c, &mut data);
             let f = Frame::from_parts(CanId::new(1, t.msg_id, c)?, dlc, data)?;
             Some((f, bits_to_ns(exact_bits(&f), bitrate) - ifs))
         })

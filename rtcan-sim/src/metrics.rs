@@ -7,7 +7,7 @@
 //! for the plots), not by the length of the run.
 use std::collections::VecDeque;
 
-use rtcan_core::fragment::fragment_count;
+use rtcan_core::fragment::{counter_of, fragment_count};
 use rtcan_core::timing::INTERMISSION_BITS;
 use rtcan_core::{Class, MsgId, Nanos};
 

@@ -123,10 +123,11 @@ mod tests {
         assert!(c1.iter().any(|e| e.slot == 11 && e.tx == 2));
     }
 
-    /// The defect of the hand-laid tables (`off += size`): a multi-frame topic's CRC
-    /// bytes landed in the next topic's buffer. The model's buffers are disjoint.
+    /// The defect of the hand-laid tables (`off += size` where the wire length was
+    /// size + 2 with the old transfer CRC): bytes landed in the next topic's buffer. The
+    /// model's buffers are disjoint and hold the wire length.
     #[test]
-    fn receive_buffers_are_disjoint_and_hold_the_transfer_crc() {
+    fn receive_buffers_are_disjoint_and_hold_the_wire_length() {
         let sc = scenario(our_laxity(), 1.0).unwrap();
         assert_eq!(
             sc.tables.len(),

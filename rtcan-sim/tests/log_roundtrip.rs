@@ -83,7 +83,14 @@ fn decode_reassembles_every_sent_message_of_a_sim_log() {
         .wire
         .iter()
         .filter(|w| {
-            w.ok && w.frame.id().fragment() == 0
+            // The fragment field carries the transfer ID too: the counter needs the size.
+            let size = cat
+                .topics
+                .iter()
+                .find(|t| t.msg_id == w.frame.id().msg_id().0)
+                .map(|t| usize::from(t.size));
+            w.ok && size
+                .is_some_and(|n| rtcan_core::fragment::counter_of(n, w.frame.id().fragment()) == 0)
                 && w.frame.id().laxity() != 63
                 && !w.frame.id().is_sync()
         })

@@ -26,6 +26,7 @@ use crate::slot_plan::{SlotPlan, StagedAbort};
 use crate::sof::{valid_bits_min, SofClock};
 use crate::tx_image::{TxImage, TxPort};
 use core::marker::PhantomData;
+use rtcan_core::confinement::ErrorState;
 use rtcan_core::driver::{Controller, Host, Mailbox, TxResult};
 use rtcan_core::engine::Engine;
 use rtcan_core::frame::Frame;
@@ -382,7 +383,7 @@ impl Protocol {
     {
         match *event {
             TxEvent::Done(m, r) => self.on_tx_done(m, r, engine, host, slot),
-            TxEvent::BusOff => self.on_bus_off(engine, slot),
+            TxEvent::BusOff => self.on_bus_off(engine, host, slot),
         }
     }
 
@@ -391,14 +392,16 @@ impl Protocol {
     /// transmitted until the controller recovered and (on a slave) a sync frame re-synced.
     #[cold]
     #[inline(never)]
-    pub fn on_bus_off<L, T, P, const RX: usize, const A: usize, const Q: usize>(
+    pub fn on_bus_off<L, T, P, H, const RX: usize, const A: usize, const Q: usize>(
         &mut self,
         engine: &mut Engine<'_, RX, A, Q>,
+        host: &mut H,
         slot: &mut L,
     ) where
         L: Lock<SlotCore<T, P>>,
         T: SlotTimerHw,
         P: TxPort,
+        H: Host,
     {
         let cancelled = slot.lock(|c| {
             // The status-change interrupt may have blocked it already; blocked until the
@@ -411,7 +414,15 @@ impl Protocol {
         self.synthetic |= cancelled;
         self.mute = Mute::UntilRecovery;
         self.stats.bus_off = self.stats.bus_off.saturating_add(1);
-        engine.on_bus_off();
+        // The engine counts it, steps down if it was the master and stays silent until
+        // it re-synchronised (docs/PROTOCOL.md §5.7). bxCAN's TEC saturates at bus-off.
+        let now = slot.lock(|c| c.timer.now());
+        let off = ErrorState {
+            tec: 255,
+            rec: 0,
+            bus_off: true,
+        };
+        engine.on_error_state(now, off, &mut self.gate(slot), host);
     }
 
     #[cold]
@@ -446,9 +457,12 @@ impl Protocol {
         if self.mute == Mute::Off && slot.lock(|c| c.plan.is_blocked()) {
             // The status-change interrupt blocked the plan but its event was lost (queue
             // full): handle the bus-off now.
-            self.on_bus_off(engine, slot);
+            self.on_bus_off(engine, host, slot);
         }
         if self.mute == Mute::UntilRecovery && !slot.lock(|c| c.tx.is_bus_off()) {
+            // Recovered (128 × 11 recessive bits): the engine listens again from now.
+            let now = slot.lock(|c| c.timer.now());
+            engine.on_error_state(now, ErrorState::default(), &mut self.gate(slot), host);
             if engine.is_master() {
                 // The master's sync defines the slots: its next plan is on time.
                 self.mute = Mute::Off;

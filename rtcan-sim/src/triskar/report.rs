@@ -151,7 +151,7 @@ pub fn triskar_json(r: &TriskarRun, speed_x: f64) -> String {
                 k.hrt_late,
                 k.sync_missed,
                 k.rx_overrun,
-                k.rx_unknown_id + k.rx_bad_dlc + k.rx_out_of_order + k.rx_crc + k.rx_incomplete
+                k.rx_unknown_id + k.rx_bad_dlc + k.rx_out_of_order + k.rx_other_transfer + k.rx_incomplete
                     + k.rx_bad_size + k.rx_bad_sync + k.rx_bad_heartbeat,
                 m.motor.map_or("null".into(), |(w, _)| num(f64::from(w)))
             )

@@ -17,7 +17,7 @@ use rtcan_board_qemu::robot::{self, master, slave1, slave2};
 use rtcan_board_qemu::test_host::TestHost;
 use rtcan_board_qemu::{check, pass, Node, SoftBus, SoftCan, Station};
 use rtcan_core::driver::{Controller, Mailbox};
-use rtcan_core::fragment::{crc16, fragment_data};
+use rtcan_core::fragment::fragment_data;
 use rtcan_core::frame::Frame;
 use rtcan_core::id::{CanId, MsgId};
 
@@ -70,13 +70,12 @@ fn main() -> ! {
     // Loading one TX frame: fragment bytes + identifier + frame + mailbox write, for
     // every fragment of a 30-byte message (the engine's per-frame transmit work).
     let payload = [0x5Au8; 30];
-    let crc = crc16(&payload);
     let mut can = SoftCan::new();
     let mut load = Stat::default();
     for counter in (0..4u8).rev() {
         load.add(meter.instructions(&mut || {
             let mut out = [0u8; 8];
-            let dlc = fragment_data(black_box(&payload), crc, counter, &mut out);
+            let dlc = fragment_data(black_box(&payload), counter, &mut out);
             if let Some(f) =
                 CanId::new(17, MsgId(0x143), counter).and_then(|id| Frame::from_parts(id, dlc, out))
             {

@@ -14,7 +14,7 @@ use rtcan_board_qemu::meter::{report, Stat, SysTickMeter};
 use rtcan_board_qemu::{check, pass};
 use rtcan_core::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult};
 use rtcan_core::engine::Engine;
-use rtcan_core::fragment::{crc16, fragment_data};
+use rtcan_core::fragment::fragment_data;
 use rtcan_core::frame::Frame;
 use rtcan_core::id::{CanId, Class, MsgId};
 use rtcan_core::laxity::LaxityEncoding;
@@ -304,7 +304,6 @@ fn main() -> ! {
         Stat::default(),
     );
     let payload20 = [0xA5u8; 20];
-    let crc = crc16(&payload20);
     let mut t = 10_000u64;
     for cycle in 0..20u16 {
         let sf = sync_frame(Sync { cycle, mask: MASK }, 60);
@@ -315,7 +314,7 @@ fn main() -> ! {
         rx1.add(meter.instructions(&mut || s.on_rx(&f, t + 300_000, &mut scan, &mut host)));
         for counter in (0..3u8).rev() {
             let mut data = [0u8; 8];
-            let dlc = fragment_data(&payload20, crc, counter, &mut data);
+            let dlc = fragment_data(&payload20, counter, &mut data);
             let Some(f) = CanId::new(9, MsgId(0x151), counter)
                 .and_then(|id| Frame::from_parts(id, dlc, data))
             else {

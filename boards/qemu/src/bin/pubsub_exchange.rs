@@ -279,7 +279,7 @@ fn main() -> ! {
         s2.engine.counters(),
     ] {
         check!(
-            c.rx_crc == 0
+            c.rx_other_transfer == 0
                 && c.rx_out_of_order == 0
                 && c.rx_bad_dlc == 0
                 && c.rx_incomplete == 0
