@@ -12,7 +12,7 @@ mod common;
 use common::*;
 use rtcan_core::admission::{admit, build_masks, HrtRequest, Placement};
 use rtcan_core::driver::{Event, TxOutcome};
-use rtcan_core::fragment::wire_len;
+use rtcan_core::fragment::{counter_of, wire_len};
 use rtcan_core::id::{CanId, Class, MsgId};
 use rtcan_core::laxity::LaxityEncoding;
 use rtcan_core::tables::{BusConfig, CalEntry, NodeTables, RxTopic, TxTopic};
@@ -680,13 +680,13 @@ fn overlapping_and_out_of_range_receive_buffers_are_rejected() {
         rx: rx_table(rows),
         ..base
     };
-    // 20-byte topic: 22 wire bytes (payload + transfer CRC), then an 8-byte topic.
-    let good = with_rx(&[(0x140, 20, 0), (0x141, 8, 22)]);
-    assert_eq!(check_tables(&good, 16, 30), Ok(()));
-    // The rtcan-paper sim's bug: laid out with `size`, so the CRC (bytes 20..22) of the
-    // first topic lands in the second topic's buffer.
+    // 20-byte topic: 20 wire bytes (PROTOCOL §7.1), then an 8-byte topic.
+    let good = with_rx(&[(0x140, 20, 0), (0x141, 8, 20)]);
+    assert_eq!(check_tables(&good, 16, 28), Ok(()));
+    // The rtcan-paper sim's old bug, in today's units: a buffer laid out two bytes short
+    // of the previous topic's wire length, so its tail lands in the next topic's buffer.
     assert_eq!(
-        check_tables(&with_rx(&[(0x140, 20, 0), (0x141, 8, 20)]), 16, 30),
+        check_tables(&with_rx(&[(0x140, 20, 0), (0x141, 8, 18)]), 16, 28),
         Err(TablesError::RxOverlap)
     );
     // Same start, and a buffer inside another one.
@@ -703,20 +703,20 @@ fn overlapping_and_out_of_range_receive_buffers_are_rejected() {
         check_tables(&with_rx(&[(0x140, 8, 8), (0x141, 8, 0)]), 16, 30),
         Err(TablesError::RxOverlap)
     );
-    // Past the end: the arena must hold wire_len (22), not size (20), for the last topic.
+    // Past the end: the arena must hold the last topic's whole wire length (28 bytes).
     assert_eq!(
-        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 30),
+        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 28),
         Ok(())
     );
     assert_eq!(
-        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 29),
+        check_tables(&with_rx(&[(0x141, 8, 0), (0x142, 20, 8)]), 16, 27),
         Err(TablesError::ArenaTooSmall)
     );
     assert_eq!(
         check_tables(&with_rx(&[(0x141, 8, u16::MAX)]), 16, 512),
         Err(TablesError::ArenaTooSmall)
     );
-    // A topic no transfer can carry (1023 bytes > MAX_PAYLOAD), receive or transmit.
+    // A topic no transfer can carry (1023 bytes > MAX_PAYLOAD = 256), receive or transmit.
     assert_eq!(
         check_tables(&with_rx(&[(0x140, 1023, 0)]), 16, 4096),
         Err(TablesError::BadSize)
@@ -913,7 +913,10 @@ fn back_to_back_tables() -> (NodeTables<'static>, NodeTables<'static>) {
 /// retransmission is still on the wire when slot 12 loads B's first fragment.
 fn hrt_last_fragment_retransmitted_into_the_next_transfer(reuse_tokens: bool) {
     let mut b = back_to_back_hrt(reuse_tokens);
-    let last = CanId::new(0, MsgId(0x0150), 0).unwrap().raw();
+    // The last fragment (counter 0) of the 10-byte topic, whatever its transfer ID.
+    fn last(id: CanId) -> bool {
+        !id.is_sync() && id.msg_id() == MsgId(0x0150) && counter_of(10, id.fragment()) == 0
+    }
     let slot11 = T0 + (4 * 60 + 11) * SLOT_NS;
     b.destroy.push((slot11, last));
     let cycles = 8;
@@ -922,7 +925,7 @@ fn hrt_last_fragment_retransmitted_into_the_next_transfer(reuse_tokens: bool) {
     let retx = b
         .log
         .iter()
-        .find(|w| w.sof > slot11 && w.frame.id().raw() == last)
+        .find(|w| w.sof > slot11 && last(w.frame.id()))
         .unwrap();
     assert!(
         retx.end > slot11 + SLOT_NS,
@@ -948,11 +951,7 @@ fn hrt_last_fragment_retransmitted_into_the_next_transfer(reuse_tokens: bool) {
     assert_eq!(b.nodes[1].engine.counters().rx_incomplete, 0);
     assert_eq!(b.nodes[0].engine.counters().deadline_missed, 0);
     // Every transfer's last fragment went on the wire.
-    let lasts: Vec<_> = b
-        .log
-        .iter()
-        .filter(|w| w.frame.id().raw() == last)
-        .collect();
+    let lasts: Vec<_> = b.log.iter().filter(|w| last(w.frame.id())).collect();
     assert_eq!(lasts.len(), transfers);
 }
 
@@ -981,7 +980,11 @@ fn hrt_transfer_with_a_failed_earlier_fragment_is_reported_missed_once() {
     let mb = |can: &TestCan, fragment: u8| {
         can.mailboxes
             .iter()
-            .position(|m| m.is_some_and(|f| f.id().fragment() == fragment && !f.id().is_sync()))
+            .position(|m| {
+                m.is_some_and(|f| {
+                    !f.id().is_sync() && counter_of(10, f.id().fragment()) == fragment
+                })
+            })
             .unwrap()
     };
     let (m1, m0) = (mb(&can, 1), mb(&can, 0));

@@ -159,7 +159,7 @@ fn cycle_starts(b: &Bus) -> usize {
 }
 
 #[test]
-fn master_clock_jump_of_one_hour_skips_to_the_current_slot() {
+fn master_clock_jump_of_one_hour_listens_first_then_syncs_on() {
     within_20s(|| {
         let mut b = two_nodes(SLOT, 50_000_000, 0.0);
         b.nodes[1].alive = false; // the master alone: its own clock defines bus time
@@ -167,31 +167,38 @@ fn master_clock_jump_of_one_hour_skips_to_the_current_slot() {
         let t0 = SLOT + 5 * CYCLE + 3 * SLOT + SLOT / 2;
         b.run(t0);
         assert_eq!(cycle_starts(&b), 6);
-        // The master's clock jumps one hour (360 000 cycles) forward: it lands in cycle
-        // 360 005, 3.5 slots in. Cycles 6..=360 004 were never started.
+        // The master's clock jumps one hour (360 000 cycles) forward. To the master this
+        // is a stall of a whole cycle and more: another module may have taken over the
+        // sync meanwhile, so it steps down and listens first (PROTOCOL §5.6 rule 1), in
+        // O(1) whatever the jump (§5.8): no walk over the 360 000 cycles.
         b.nodes[0].offset += HOUR as f64;
         b.nodes[0].wake = b.now;
-        b.run(t0 + 3 * CYCLE);
-        let c = b.nodes[0].engine.counters();
-        assert_eq!(c.cycles_skipped, 359_999);
-        assert_eq!(c.hrt_late, 0);
-        // Cycle 360 005 (started late, no sync), then 360 006..=360 008 on time.
-        assert_eq!(cycle_starts(&b), 6 + 4);
-        let syncs: Vec<_> = b
+        b.run(t0 + SLOT);
+        let e = &b.nodes[0].engine;
+        assert!(!e.is_master(), "listens first after the stall");
+        assert_eq!(b.nodes[0].host.events.last(), Some(&Event::SyncLost));
+        assert_eq!(e.counters().hrt_late, 0);
+        // Nobody else syncs: after takeover_cycles(0) = 4 silent cycles it takes the sync
+        // back. Its cycle position follows its (jumped) clock: the stall landed in cycle
+        // 360 005, it listened through 360 006..=360 009 and syncs from 360 010 on,
+        // numbered on (§5.8: the master numbers cycles on its own clock).
+        b.run(t0 + 7 * CYCLE);
+        assert!(b.nodes[0].engine.is_master());
+        let syncs: Vec<u32> = b
             .log
             .iter()
             .filter(|w| w.frame.id().is_sync() && w.sof > t0)
-            .map(|w| (w.sof, w.frame.id().raw()))
+            .map(|w| w.frame.id().raw() & 0x7fff)
             .collect();
-        let counter = |c: u64| (c % (1 << 15)) as u32;
+        assert!(!syncs.is_empty(), "syncs again after listening");
+        assert!(syncs.len() <= 3, "silent for 4 of the 7 cycles: {syncs:?}");
+        for w in syncs.windows(2) {
+            assert_eq!(w[1], w[0] + 1, "numbered on: {syncs:?}");
+        }
         assert_eq!(
-            syncs,
-            vec![
-                (SLOT + 6 * CYCLE, counter(360_006)),
-                (SLOT + 7 * CYCLE, counter(360_007)),
-                (SLOT + 8 * CYCLE, counter(360_008)),
-            ],
-            "syncs on the jumped clock's cycle boundaries, numbered on"
+            syncs[0],
+            (360_010 % (1 << 15)) as u32,
+            "cycle of the jumped clock"
         );
     });
 }
@@ -231,7 +238,7 @@ fn slave_clock_jump_of_one_hour_reports_sync_loss_and_relocks() {
 }
 
 #[test]
-fn poll_near_the_end_of_time_returns() {
+fn poll_near_the_end_of_time_returns_and_stops_for_good() {
     within_20s(|| {
         let (master, _) = tables(SLOT, 50_000_000);
         for now in [
@@ -244,29 +251,31 @@ fn poll_near_the_end_of_time_returns() {
         ] {
             let mut engine = TestEngine::new(master, 0);
             let (mut can, mut host) = (TestCan::default(), TestHost::default());
-            let next = engine.poll(now, &mut can, &mut host);
-            // Fresh master: cycle 0 starts at one slot, boundaries every slot from there
-            // (saturating at u64::MAX). The wake-up is the next boundary, or earlier for
-            // a window-close check (the heartbeat due in a skipped cycle may be loaded).
-            let boundary = u128::from(SLOT)
-                + (u128::from(now - SLOT) / u128::from(SLOT) + 1) * u128::from(SLOT);
-            let boundary = boundary.min(u128::from(u64::MAX)) as u64;
-            assert_eq!(engine.counters().cycles_skipped, u32::MAX, "saturated");
-            if now > u64::MAX - 4 * CYCLE {
-                // Within three cycles of the end of u64 time the boundaries would
-                // saturate and never pass: the engine stops there, silent, for good.
-                assert_eq!(next, u64::MAX, "now {now}");
-                assert!(!engine.is_synced() && !engine.is_master());
+            // Created at 0, first polled at `now`: a stall of more than a cycle, so it
+            // steps down and listens first (PROTOCOL §5.6 rule 1), then takes the sync
+            // back after 4 silent cycles, or, within a few cycles of the end of u64 time
+            // where boundaries would saturate and never pass, stops for good (§5.8).
+            let mut t = engine.poll(now, &mut can, &mut host);
+            assert!(t >= now, "now {now}: woke at {t}");
+            assert!(!engine.is_master(), "listens first");
+            let mut polls = 0;
+            while t < u64::MAX && !engine.is_master() && polls < 1_000 {
+                let n = engine.poll(t, &mut can, &mut host);
+                assert!(n >= t, "{t} -> {n}");
+                t = n;
+                polls += 1;
+            }
+            if now > u64::MAX - 8 * CYCLE {
+                // Whether or not it took the sync back first, polling at the end of time
+                // stops it for good.
+                let end = engine.poll(u64::MAX, &mut can, &mut host);
+                assert_eq!(end, u64::MAX, "now {now}");
                 assert_eq!(engine.poll(u64::MAX, &mut can, &mut host), u64::MAX);
-                assert_eq!(engine.next_wakeup(), u64::MAX);
                 continue;
             }
-            assert!(
-                next > now && next <= boundary,
-                "now {now}: {next} vs {boundary}"
-            );
+            assert!(engine.is_master(), "now {now}: took the sync back");
+            assert!(polls <= 4 * SPC as u32 + 8, "{polls} polls");
             // Then on as usual, one slot at a time.
-            let mut t = next;
             for _ in 0..40 {
                 let n = engine.poll(t, &mut can, &mut host);
                 assert!(n > t && n - t <= SLOT, "{t} -> {n}");

@@ -433,7 +433,9 @@ impl Meter {
             return;
         };
         let Some(t) = self.topics.get(ti) else { return };
-        let last = id.fragment() + 1 == fragment_count(t.size);
+        // The fragment field carries the transfer ID above the counter (PROTOCOL §7.1).
+        let counter = counter_of(t.size, id.fragment());
+        let last = counter + 1 == fragment_count(t.size);
         match t.class {
             Class::Hrt => {
                 let period = t.period_ns;
@@ -448,7 +450,7 @@ impl Meter {
                     }
                     a.current = Some(payload_seq(w.frame.data()));
                 }
-                if id.fragment() == 0 && a.known {
+                if counter == 0 && a.known {
                     let Some(seq) = a.current.take() else { return };
                     if let Ok(k) = a.pending.binary_search_by_key(&seq, |e| e.0) {
                         if let Some((_, at)) = a.pending.remove(k) {
@@ -473,7 +475,7 @@ impl Meter {
                 if last {
                     a.current = Some(payload_seq(w.frame.data()));
                 }
-                if id.fragment() == 0 {
+                if counter == 0 {
                     let Some(seq) = a.current.take() else { return };
                     let Ok(k) = a.pending.binary_search_by_key(&seq, |e| e.0) else {
                         return;

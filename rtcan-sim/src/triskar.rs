@@ -430,15 +430,16 @@ impl SrtMatcher {
 
     fn frame(&mut self, w: &crate::bus::WireFrame) {
         let id = w.frame.id();
-        if !w.ok || id.is_sync() || id.fragment() != 0 {
+        if !w.ok || id.is_sync() {
             return;
         }
-        // Fragments go out highest first; fragment 0 completes the transfer.
-        if let Some((_, ends, _)) = self
-            .topics
-            .iter_mut()
-            .find(|(t, _, _)| t.node == w.node && t.msg_id == id.msg_id())
-        {
+        // Fragments go out highest first; counter 0 (the fragment field also carries the
+        // transfer ID, docs/PROTOCOL.md §7.1) completes the transfer.
+        if let Some((_, ends, _)) = self.topics.iter_mut().find(|(t, _, _)| {
+            t.node == w.node
+                && t.msg_id == id.msg_id()
+                && rtcan_core::fragment::counter_of(t.size, id.fragment()) == 0
+        }) {
             ends.push_back(w.end);
         }
     }

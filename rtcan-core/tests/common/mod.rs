@@ -6,6 +6,7 @@
 use rtcan_core::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxResult};
 use rtcan_core::engine::Engine;
 use rtcan_core::frame::Frame;
+use rtcan_core::id::CanId;
 use rtcan_core::tables::NodeTables;
 use rtcan_core::timing::{bits_to_ns, exact_bits};
 use rtcan_core::Nanos;
@@ -130,10 +131,11 @@ pub struct Bus {
     pub bitrate: u32,
     pub now: Nanos,
     pub log: Vec<WireFrame>,
-    /// Transmissions to destroy with an error frame: the first one of raw identifier
-    /// `.1` starting at or after global time `.0`. Receivers drop it; the transmitter's
-    /// mailbox stays loaded and retransmits (automatic retransmission, as on bxCAN).
-    pub destroy: Vec<(Nanos, u32)>,
+    /// Transmissions to destroy with an error frame: the first one whose identifier
+    /// `.1` accepts, starting at or after global time `.0`. Receivers drop it; the
+    /// transmitter's mailbox stays loaded and retransmits (automatic retransmission, as on
+    /// bxCAN). A predicate, not a raw ID: fragment fields carry transfer IDs (§7.1).
+    pub destroy: Vec<(Nanos, fn(CanId) -> bool)>,
     /// Transmissions destroyed so far (the frames, as they were on the wire).
     pub destroyed: Vec<WireFrame>,
     current: Option<WireFrame>,
@@ -222,7 +224,7 @@ impl Bus {
                     let hit = self
                         .destroy
                         .iter()
-                        .position(|&(t, id)| cur.sof >= t && cur.frame.id().raw() == id);
+                        .position(|&(t, hit)| cur.sof >= t && hit(cur.frame.id()));
                     if let Some(k) = hit {
                         self.destroy.remove(k);
                         self.nodes[cur.node].can.on_wire = None;
