@@ -463,13 +463,15 @@ impl Protocol {
             // Recovered (128 × 11 recessive bits): the engine listens again from now.
             let now = slot.lock(|c| c.timer.now());
             engine.on_error_state(now, ErrorState::default(), &mut self.gate(slot), host);
-            if engine.is_master() {
-                // The master's sync defines the slots: its next plan is on time.
-                self.mute = Mute::Off;
-                self.release_parked(slot);
-            } else {
-                self.mute = Mute::UntilSync;
-            }
+            // A master steps down at bus-off and listens first (PROTOCOL §5.6, §5.7):
+            // like a slave, it transmits again after a sync, its own after a takeover.
+            self.mute = Mute::UntilSync;
+        }
+        if self.mute == Mute::UntilSync && engine.is_master() {
+            // Nobody else sent a sync while it listened: it took the sync over, and its
+            // sync defines the slots from now on.
+            self.mute = Mute::Off;
+            self.release_parked(slot);
         }
         self.report_synthetic(engine, host, slot);
         let now = slot.lock(|c| c.timer.now());

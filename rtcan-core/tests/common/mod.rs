@@ -7,6 +7,9 @@ use rtcan_core::driver::{Controller, Event, Host, Mailbox, Token, TxOutcome, TxR
 use rtcan_core::engine::Engine;
 use rtcan_core::frame::Frame;
 use rtcan_core::id::CanId;
+
+/// Which identifiers a `Bus::destroy` entry hits.
+pub type IdMatch = fn(CanId) -> bool;
 use rtcan_core::tables::NodeTables;
 use rtcan_core::timing::{bits_to_ns, exact_bits};
 use rtcan_core::Nanos;
@@ -135,7 +138,7 @@ pub struct Bus {
     /// `.1` accepts, starting at or after global time `.0`. Receivers drop it; the
     /// transmitter's mailbox stays loaded and retransmits (automatic retransmission, as on
     /// bxCAN). A predicate, not a raw ID: fragment fields carry transfer IDs (§7.1).
-    pub destroy: Vec<(Nanos, fn(CanId) -> bool)>,
+    pub destroy: Vec<(Nanos, IdMatch)>,
     /// Transmissions destroyed so far (the frames, as they were on the wire).
     pub destroyed: Vec<WireFrame>,
     current: Option<WireFrame>,

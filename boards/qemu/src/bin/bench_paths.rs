@@ -202,7 +202,7 @@ fn run(meter: &PathMeter, verify: bool) {
     ] {
         check!(c.hrt_late == 0, "late HRT {}", c.hrt_late);
         check!(
-            c.rx_crc == 0 && c.rx_out_of_order == 0 && c.rx_incomplete == 0,
+            c.rx_other_transfer == 0 && c.rx_out_of_order == 0 && c.rx_incomplete == 0,
             "receive errors"
         );
     }
