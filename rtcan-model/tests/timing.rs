@@ -1,0 +1,228 @@
+//! The build-time timing check (issue 10): the reference robots pass with the
+//! prioritised design's cost table, fail with the single-priority design's, and a guard
+//! too short for the slot timer path is rejected with the exact error.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+
+use rtcan_model::costs::{CostTable, Design};
+use rtcan_model::timing::{self, MAX_CPU_LOAD};
+use rtcan_model::{analyze, report, Analysis, Code, Diagnostic, Diagnostics, Status};
+use std::path::PathBuf;
+
+fn read(rel: &str) -> String {
+    std::fs::read_to_string(
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(rel),
+    )
+    .unwrap()
+}
+
+fn load(rel: &str) -> Analysis {
+    analyze(rel, &read(rel))
+}
+
+/// Diagnostics the check gives `rel` with `table` for every module.
+fn check_with(rel: &str, table: &CostTable) -> Vec<Diagnostic> {
+    let a = load(rel);
+    let (model, plan) = (a.model.unwrap(), a.plan.unwrap());
+    let t = timing::analyze(&plan, Some(table)).unwrap();
+    let mut d = Vec::new();
+    timing::diagnose(&model, &plan, &t, Some(table), &mut d);
+    d
+}
+
+#[test]
+fn reference_robots_pass_with_the_prioritised_design() {
+    let new = Design::Prioritised.table().unwrap();
+    for rel in [
+        "robot.toml",
+        "robots/rtcan-paper.toml",
+        "robots/accept-all.toml",
+        "robots/qemu-test.toml",
+    ] {
+        let a = load(rel);
+        assert_eq!(a.status(), Status::Admissible, "{rel}");
+        let plan = a.plan.unwrap();
+        let t = timing::analyze(&plan, Some(&new)).unwrap();
+        assert_eq!(t.guard_ns, plan.bus.guard_ns);
+        assert_eq!(t.modules.len(), plan.modules.len());
+        for m in &t.modules {
+            assert!(
+                m.slot_latency_worst_ns + m.clock_error_ns <= t.guard_ns,
+                "{rel} {}: {m:?}",
+                m.name
+            );
+            // The issue's goals: latency <= 3 us, protocol load <= 50 %.
+            assert!(m.slot_latency_worst_ns <= 3_000, "{rel} {m:?}");
+            assert!(m.cpu_load > 0.0 && m.cpu_load <= 0.5, "{rel} {m:?}");
+        }
+    }
+}
+
+#[test]
+fn prioritised_latency_is_entry_plus_the_txrq_path_exactly() {
+    // The slot timer alone at the top priority: no blocking, no interference, so the
+    // latency is (12 + 160 * 1.25) cycles at 72 MHz = 212 cycles = 2944.4 ns, rounded up.
+    let new = Design::Prioritised.table().unwrap();
+    let plan = load("robot.toml").plan.unwrap();
+    let t = timing::analyze(&plan, Some(&new)).unwrap();
+    let gw = &t.modules[0];
+    assert_eq!(gw.name, "gateway");
+    assert_eq!(gw.slot_latency_worst_ns, 2_945);
+    assert_eq!(gw.blocking_cycles, 0.0);
+    assert_eq!(gw.interference_cycles, 0.0);
+    assert_eq!(gw.clock_error_ns, 0, "the master defines bus time");
+    let m1 = &t.modules[1];
+    assert_eq!(m1.clock_error_ns, 2_000, "two bit times at 1 Mbit/s");
+    // motor1 accepts the sync (8 B), heartbeats (5 B) and velocity (Twist, 12 B: last
+    // fragment 6 B): the shortest is the heartbeat, 54 + 40 + 13 = 107 bits.
+    assert_eq!(m1.rx_frame_min_ns, 107_000);
+}
+
+#[test]
+fn single_priority_design_fails_the_reference_robots() {
+    let old = Design::SinglePriority.table().unwrap();
+    for rel in ["robot.toml", "robots/rtcan-paper.toml"] {
+        let d = check_with(rel, &old);
+        let plan = load(rel).plan.unwrap();
+        let guard: Vec<&Diagnostic> = d.iter().filter(|d| d.code == Code::GuardTooShort).collect();
+        let cpu: Vec<&Diagnostic> = d.iter().filter(|d| d.code == Code::CpuOverload).collect();
+        assert_eq!(
+            guard.len(),
+            plan.modules.len(),
+            "{rel}: every module misses the guard"
+        );
+        assert_eq!(
+            cpu.len(),
+            plan.modules.len(),
+            "{rel}: every module overloads"
+        );
+    }
+    let plan = load("robot.toml").plan.unwrap();
+    let t = timing::analyze(&plan, Some(&old)).unwrap();
+    let gw = &t.modules[0];
+    // Blocking: one RX handler at the timer's priority, 12 + 7665 * 1.25 cycles.
+    assert_eq!(gw.blocking_cycles, 12.0 + 7665.0 * 1.25);
+    // SysTick (above everything) interferes once: 12 + 60 * 1.25 cycles.
+    assert_eq!(gw.interference_cycles, 12.0 + 60.0 * 1.25);
+    // (12 + 274 * 1.25 + 9593.25 + 87) cycles / 72 MHz = 139.372 us.
+    assert_eq!(
+        gw.slot_latency_worst_ns,
+        ((12.0 + 274.0 * 1.25 + 9593.25 + 87.0) * 1e9 / 72e6_f64).ceil() as u64
+    );
+    assert!(gw.cpu_load > MAX_CPU_LOAD);
+    // The gateway receives odometry (24 B: 26 on the wire, last fragment 2 B): 54 + 16 +
+    // 13 = 83 bits, the shortest frame it accepts.
+    assert_eq!(gw.rx_frame_min_ns, 83_000);
+}
+
+#[test]
+fn single_priority_error_text_is_exact() {
+    let old = Design::SinglePriority.table().unwrap();
+    let d = check_with("robot.toml", &old);
+    let src = read("robot.toml");
+    let rendered = Diagnostics {
+        file: "robot.toml".into(),
+        source: src,
+        items: d.into_iter().take(2).collect(),
+    }
+    .render();
+    assert_eq!(
+        rendered,
+        r#"error[guard-too-short]: module `gateway`: worst-case latency from a slot boundary to its TXRQ (139.372 us) plus its clock error bound (0 ns) is 139.372 us, more than the guard (5 us)
+  --> robot.toml:58:10
+   |
+58 | [modules.gateway]       # host link (uROSnode); master of the bus
+   |          ^^^^^^^
+   = help: set `guard = "139.372us"` in `[bus]` and use at most 33 slots per 10 ms cycle (slot >= 160 us frame + guard)
+   = note: cost table `single-priority`, CPI 1.25 at 72 MHz; docs/ROBOT_TOML.md "Timing check"
+
+error[cpu-overload]: module `gateway`: protocol CPU load 179% at 100% bus load of the shortest frames its filters accept (83 us each)
+  --> robot.toml:58:10
+   |
+58 | [modules.gateway]       # host link (uROSnode); master of the bus
+   |          ^^^^^^^
+   = help: lower the bitrate, use fewer slots per cycle, or exact filters (`filters = "exact"`) so that fewer frames reach the CPU
+   = note: cost table `single-priority`, CPI 1.25 at 72 MHz; docs/ROBOT_TOML.md "Timing check"
+
+error: 2 errors in robot.toml
+"#
+    );
+}
+
+#[test]
+fn a_one_microsecond_guard_is_rejected_by_analyze() {
+    let src = read("robot.toml").replace("guard = \"5us\"", "guard = \"1us\"");
+    let a = analyze("robot.toml", &src);
+    assert_eq!(a.status(), Status::NotAdmissible);
+    assert!(a.plan.is_none(), "check and build must not get a plan");
+    let codes: Vec<Code> = a.diagnostics.items.iter().map(|d| d.code).collect();
+    assert_eq!(codes, vec![Code::GuardTooShort; 6]);
+    let first = &a.diagnostics.items[0];
+    assert_eq!(
+        first.message,
+        "module `gateway`: worst-case latency from a slot boundary to its TXRQ (2.945 us) plus its clock error bound (0 ns) is 2.945 us, more than the guard (1 us)"
+    );
+    assert_eq!(
+        first.help,
+        vec!["set `guard = \"2.945us\"` in `[bus]` (the 166.666 us slot still holds the 160 us frame plus that guard)".to_string()]
+    );
+    // Exactly the bound passes: the slaves need 2.945 + 2 us.
+    let src = read("robot.toml").replace("guard = \"5us\"", "guard = \"4.945us\"");
+    assert_eq!(analyze("robot.toml", &src).status(), Status::Admissible);
+    let src = read("robot.toml").replace("guard = \"5us\"", "guard = \"4.944us\"");
+    let a = analyze("robot.toml", &src);
+    assert_eq!(
+        a.diagnostics.items.len(),
+        5,
+        "the five slaves, not the master"
+    );
+}
+
+#[test]
+fn json_has_the_timing_fields_exactly() {
+    let v: serde_json::Value =
+        serde_json::from_str(&report::json_text(&load("robot.toml"))).unwrap();
+    let t = &v["timing"];
+    assert_eq!(t["guard_ns"], 5_000);
+    let mods = t["modules"].as_array().unwrap();
+    assert_eq!(mods.len(), 6);
+    for m in mods {
+        let mut keys: Vec<&str> = m.as_object().unwrap().keys().map(String::as_str).collect();
+        keys.sort_unstable();
+        assert_eq!(keys, ["cpu_load", "name", "slot_latency_worst_ns"]);
+    }
+    assert_eq!(mods[0]["name"], "gateway");
+    assert_eq!(mods[0]["slot_latency_worst_ns"], 2_945);
+    let text = report::text(&load("robot.toml").plan.unwrap());
+    assert!(text.contains("\ntiming (guard 5 us;"), "{text}");
+    assert!(text.contains("  motor1               2.945 us         2 us        55 ns"));
+}
+
+#[test]
+fn latency_grows_with_the_cpi_and_interference_is_counted_per_arrival() {
+    let base = Design::Prioritised.table().unwrap();
+    let plan = load("robot.toml").plan.unwrap();
+    let at = |cpi: f64| {
+        timing::analyze(&plan, Some(&base.clone().with_cpi(cpi)))
+            .unwrap()
+            .modules[0]
+            .slot_latency_worst_ns
+    };
+    assert_eq!(at(1.0), ((12.0 + 160.0) * 1e9 / 72e6_f64).ceil() as u64);
+    assert_eq!(at(2.0), ((12.0 + 320.0) * 1e9 / 72e6_f64).ceil() as u64);
+    // RX at the timer's priority + 1: it preempts, so it interferes instead of blocking.
+    let text = rtcan_model::costs::PRIORITISED_TOML.replace(
+        "max = 150\nmean = 120\nsamples = 0\npriority = 3",
+        "max = 150\nmean = 120\nsamples = 0\npriority = 5",
+    );
+    let t = CostTable::parse(&text).unwrap();
+    let m = &timing::analyze(&plan, Some(&t)).unwrap().modules[0];
+    assert_eq!(m.interference_cycles, 12.0 + 150.0 * 1.25);
+    assert_eq!(m.blocking_cycles, 0.0);
+}
