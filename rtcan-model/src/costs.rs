@@ -73,6 +73,10 @@ pub struct PathCost {
     /// RTIC logical priority the path runs at (higher preempts lower); `None` for
     /// `slot_boundary_to_txrq`, which is a latency, not a handler.
     pub priority: Option<u8>,
+    /// A task row whose work the design runs inside this interrupt handler instead of a
+    /// task of its own (the single-priority design: reassembly and sync inside the RX
+    /// interrupt). Its cost then adds to that handler's.
+    pub runs_in: Option<&'static str>,
 }
 
 /// A cost table.
@@ -139,6 +143,24 @@ impl CostTable {
                     ))
                 }
             };
+            let runs_in = match find(p, "runs_in") {
+                None => None,
+                Some(Kind::Str(h)) => match PATHS.iter().find(|n| *n == h) {
+                    Some(n) if n.starts_with("isr_") => Some(*n),
+                    _ => {
+                        return Err(format!(
+                            "cost table: `paths.{}.runs_in` must name an isr_ path",
+                            e.key
+                        ))
+                    }
+                },
+                Some(_) => {
+                    return Err(format!(
+                        "cost table: `paths.{}.runs_in` must be a string",
+                        e.key
+                    ))
+                }
+            };
             let max = u32::try_from(num("max")?).map_err(|e| e.to_string())?;
             let mean = u32::try_from(num("mean")?).map_err(|e| e.to_string())?;
             if mean > max {
@@ -151,6 +173,7 @@ impl CostTable {
                     mean,
                     samples: num("samples")? as u64,
                     priority,
+                    runs_in,
                 },
             ));
         }
@@ -181,6 +204,7 @@ impl CostTable {
                 mean: 0,
                 samples: 0,
                 priority: None,
+                runs_in: None,
             },
             |(_, p)| *p,
         )
@@ -189,6 +213,19 @@ impl CostTable {
     /// Priority of a handler path (0 for an unknown one).
     pub fn priority(&self, name: &str) -> u8 {
         self.path(name).priority.unwrap_or(0)
+    }
+
+    /// Instructions of one activation of handler `isr`, with the longest task row the
+    /// design runs inside it (`runs_in`).
+    pub fn handler_max(&self, isr: &str) -> u32 {
+        let inline = self
+            .paths
+            .iter()
+            .filter(|(_, p)| p.runs_in == Some(isr))
+            .map(|(_, p)| p.max)
+            .max()
+            .unwrap_or(0);
+        self.path(isr).max.saturating_add(inline)
     }
 
     /// Cycles of `instructions` at this table's CPI bound.
@@ -224,7 +261,9 @@ mod tests {
         assert_eq!(new.cpi, 1.25);
         assert!(new.priority("isr_slot_timer") > new.priority("isr_can_rx"));
         let old = Design::SinglePriority.table().unwrap();
-        assert_eq!(old.path("isr_can_rx").max, 3766 + 2497 + 1402);
+        assert_eq!(old.handler_max("isr_can_rx"), 3766 + 2497 + 1402);
+        assert_eq!(old.path("task_sync_slave").runs_in, Some("isr_can_rx"));
+        assert_eq!(new.handler_max("isr_can_rx"), 150);
         assert_eq!(old.priority("isr_slot_timer"), old.priority("isr_can_rx"));
     }
 
@@ -247,6 +286,11 @@ mod tests {
             .contains("mean above max"));
         let cpi = good.replace("cpi = 1.25", "cpi = 0.0");
         assert!(CostTable::parse(&cpi).unwrap_err().contains("cpi"));
+        let runs_in = good.replace(
+            "priority = 1\n",
+            "priority = 1\nruns_in = \"task_rx_process\"\n",
+        );
+        assert!(CostTable::parse(&runs_in).unwrap_err().contains("runs_in"));
         assert_eq!(Design::from_name("old"), Some(Design::SinglePriority));
         assert_eq!(Design::from_name("prioritised"), Some(Design::Prioritised));
         assert_eq!(Design::from_name("fast"), None);

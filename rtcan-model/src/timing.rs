@@ -198,9 +198,11 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
     if !m.is_master {
         handlers.push(("task_sync_slave", bus.cycle_ns));
     }
+    // Task rows a design runs inside an interrupt count with that interrupt.
     let handlers: Vec<(&str, f64, f64)> = handlers
         .into_iter()
-        .map(|(n, period)| (n, cost(n), ns_to_cycles(period.max(1))))
+        .filter(|(n, _)| t.path(n).runs_in.is_none())
+        .map(|(n, period)| (n, t.cycles(t.handler_max(n)), ns_to_cycles(period.max(1))))
         .filter(|(_, c, _)| *c > 0.0)
         .collect();
 

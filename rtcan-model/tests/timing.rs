@@ -142,7 +142,7 @@ fn single_priority_error_text_is_exact() {
    = help: set `guard = "139.372us"` in `[bus]` and use at most 33 slots per 10 ms cycle (slot >= 160 us frame + guard)
    = note: cost table `single-priority`, CPI 1.25 at 72 MHz; docs/ROBOT_TOML.md "Timing check"
 
-error[cpu-overload]: module `gateway`: protocol CPU load 179% at 100% bus load of the shortest frames its filters accept (83 us each)
+error[cpu-overload]: module `gateway`: protocol CPU load 135% at 100% bus load of the shortest frames its filters accept (83 us each)
   --> robot.toml:58:10
    |
 58 | [modules.gateway]       # host link (uROSnode); master of the bus
