@@ -10,7 +10,8 @@ use rtcan_sim::triskar::{self, report as triskar_report, TriskarConfig};
 use rtcan_sim::{candump, paper, report, robot, svg};
 
 const USAGE: &str = "usage: rtcan sim [robot.toml] [--scenario triskar2|rtcan-paper|file.toml] [--seconds N] [--seed S]
-                 [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]";
+                 [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]
+                 [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]";
 
 struct Args {
     robot: Option<PathBuf>,
@@ -34,6 +35,8 @@ fn parse(args: &[String]) -> Result<Args, String> {
         seconds_given: false,
         master_dies_at: None,
     };
+    // The CPU model (rtcan_sim::cpu): on by default, prioritised design, CPI 1.25.
+    let (mut cpu_on, mut design, mut cpi) = (true, rtcan_model::costs::Design::Prioritised, 1.25);
     let mut it = args.iter();
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
@@ -54,6 +57,20 @@ fn parse(args: &[String]) -> Result<Args, String> {
             "--load" => a.cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
             "--ber" => a.cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
             "--out" => a.out = Some(PathBuf::from(value("--out")?)),
+            "--cpu" => {
+                cpu_on = match value("--cpu")?.as_str() {
+                    "on" => true,
+                    "off" => false,
+                    v => return Err(format!("--cpu must be `on` or `off`, not `{v}`")),
+                }
+            }
+            "--cpu-design" => {
+                let v = value("--cpu-design")?;
+                design = rtcan_model::costs::Design::from_name(&v).ok_or(format!(
+                    "unknown --cpu-design `{v}` (prioritised or single-priority; new / old)"
+                ))?;
+            }
+            "--cpi" => cpi = value("--cpi")?.parse().map_err(|_| "bad --cpi")?,
             "--json" => a.json = true,
             "--sweep" => a.sweep = true,
             s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
@@ -69,6 +86,11 @@ fn parse(args: &[String]) -> Result<Args, String> {
     if !(0.0..1.0).contains(&a.cfg.bit_error_rate) {
         return Err("--ber must be in [0, 1)".into());
     }
+    a.cfg.cpu = if cpu_on {
+        Some(rtcan_sim::cpu::CpuModel::new(design, cpi)?)
+    } else {
+        None
+    };
     Ok(a)
 }
 

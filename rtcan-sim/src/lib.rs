@@ -16,6 +16,7 @@ pub mod candump;
 pub mod clock;
 pub mod compare;
 pub mod controller;
+pub mod cpu;
 pub mod decode;
 pub mod fixed;
 pub mod ideal;

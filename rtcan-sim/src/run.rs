@@ -35,6 +35,9 @@ pub struct SimConfig {
     pub drift_ppm: f64,
     /// Keep the wire log (needed for candump and plots).
     pub record_wire: bool,
+    /// Modelled CPU of every module (`None`: handlers take no time but
+    /// `irq_latency_ns`; with a model the latency comes from it, `cpu.rs`).
+    pub cpu: Option<crate::cpu::CpuModel>,
 }
 
 impl Default for SimConfig {
@@ -47,11 +50,21 @@ impl Default for SimConfig {
             irq_latency_ns: 2_000,
             drift_ppm: 50.0,
             record_wire: true,
+            cpu: None,
         }
     }
 }
 
 impl SimConfig {
+    /// Interrupt latency the bus adds: 0 with a CPU model (it models the entry itself).
+    pub fn node_irq_latency_ns(&self) -> Nanos {
+        if self.cpu.is_some() {
+            0
+        } else {
+            self.irq_latency_ns
+        }
+    }
+
     /// Simulated end time, ns.
     pub fn end_ns(&self) -> Nanos {
         (self.seconds * 1e9) as Nanos
@@ -118,6 +131,8 @@ pub struct Run {
     pub events: HashMap<(usize, u8), Vec<Nanos>>,
     /// Simulated span, ns.
     pub sim_ns: Nanos,
+    /// CPU model figures (empty without a model).
+    pub cpu: crate::cpu::CpuReport,
 }
 
 /// Measurement window of a run.
@@ -182,6 +197,7 @@ pub fn run_ideal(sc: &Scenario, cfg: &SimConfig, engine_run: &Run) -> Run {
         rx_bad: 0,
         events: engine_run.events.clone(),
         sim_ns: cfg.end_ns(),
+        cpu: engine_run.cpu.clone(),
     }
 }
 
@@ -203,7 +219,8 @@ fn run_bus<'t, M: Module>(
             make(t, host, clock),
             NodeSetup {
                 clock,
-                irq_latency_ns: cfg.irq_latency_ns,
+                irq_latency_ns: cfg.node_irq_latency_ns(),
+                cpu: cfg.cpu.clone(),
                 ..NodeSetup::default()
             },
         );
@@ -254,6 +271,7 @@ fn run_bus<'t, M: Module>(
         rx_bad,
         events,
         sim_ns: end,
+        cpu: bus.cpu_report(|n| format!("node{n}")),
     }
 }
 

@@ -271,9 +271,10 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
             m,
             NodeSetup {
                 clock,
-                irq_latency_ns: cfg.sim.irq_latency_ns,
+                irq_latency_ns: cfg.sim.node_irq_latency_ns(),
                 nart: false,
                 filter: firmware_filter(filters),
+                cpu: cfg.sim.cpu.clone(),
             },
         );
     }
@@ -334,6 +335,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> TriskarRun {
             rx_bad: 0,
             events,
             sim_ns: end,
+            cpu: bus.cpu_report(|n| MODULES.get(n).map_or(format!("node{n}"), |s| s.to_string())),
         },
         path,
         min_gap_m: sh.physics.min_gap_m,

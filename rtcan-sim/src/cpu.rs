@@ -1,0 +1,629 @@
+//! The modelled CPU of a simulated module (issue 10): driver events no longer take zero
+//! time. Each interrupt or task is a job with the cost of its firmware path from the
+//! committed cost table (`rtcan_model::costs`, instructions × `cpi` cycles at 72 MHz),
+//! run by a fixed-priority preemptive scheduler like the Cortex-M3 NVIC under RTIC:
+//! the highest priority pending job runs; a job is preempted only by a strictly higher
+//! priority; jobs of one priority run to completion in arrival order. SysTick arrives
+//! periodically at its own priority. Critical sections of lower-priority code are part of
+//! the table's `slot_boundary_to_txrq` row and are not modelled separately.
+//!
+//! A job is a list of steps, each "run for this long, then do this": the effect (the
+//! engine's poll loading a mailbox, the RX FIFO read, delivering a frame to the engine)
+//! happens when the modelled execution reaches it, so a slot boundary's TXRQ is as late
+//! as the handlers in front of it make it. The bus (`bus.rs`) asks for the next step time
+//! and executes the effects on the module; this file only keeps time.
+use std::collections::VecDeque;
+
+use rtcan_core::driver::{Mailbox, TxResult};
+use rtcan_core::{Frame, Nanos};
+use rtcan_model::costs::{CostTable, Design};
+
+/// Core clock of every modelled board (STM32F103), Hz.
+pub const CLOCK_HZ: u32 = 72_000_000;
+
+/// Resolution of the slot-boundary → TXRQ histogram, ns.
+const HIST_BIN_NS: u64 = 10;
+/// Bins of the histogram (200 µs; longer latencies count in the last bin, max is exact).
+const HIST_BINS: usize = 20_000;
+
+/// The CPU model of one module: a design's cost table at a CPI.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CpuModel {
+    /// The cost table (its `cpi` is the one used).
+    pub table: CostTable,
+    /// Design, for reports.
+    pub design: Design,
+}
+
+impl CpuModel {
+    /// The embedded table of `design` at `cpi` cycles per instruction.
+    pub fn new(design: Design, cpi: f64) -> Result<CpuModel, String> {
+        if !(cpi.is_finite() && (0.5..=10.0).contains(&cpi)) {
+            return Err(format!("--cpi must be in [0.5, 10], got {cpi}"));
+        }
+        Ok(CpuModel {
+            table: design.table()?.with_cpi(cpi),
+            design,
+        })
+    }
+
+    /// Time of `instructions` plus `entries` exception entries, ns (rounded up).
+    fn ns(&self, instructions: u32, entries: u32) -> Nanos {
+        let cycles = self.table.cycles(instructions)
+            + f64::from(entries) * f64::from(self.table.irq_entry_cycles);
+        (cycles * 1e9 / f64::from(CLOCK_HZ)).ceil() as Nanos
+    }
+
+    fn max(&self, path: &str) -> u32 {
+        self.table.path(path).max
+    }
+
+    fn prio(&self, path: &str) -> u8 {
+        self.table.priority(path)
+    }
+
+    /// The work of `task` runs inside an interrupt handler in this design.
+    fn inline(&self, task: &str) -> bool {
+        self.table.path(task).runs_in.is_some()
+    }
+}
+
+/// What a step does when the modelled execution reaches its end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Effect {
+    /// Nothing (the rest of a handler, SysTick, slot preparation).
+    None,
+    /// The slot timer's work: the module's `wake` (engine poll: loads, aborts).
+    Wake,
+    /// The RX interrupt reads one frame from FIFO `fifo`.
+    PopRx {
+        /// FIFO index.
+        fifo: usize,
+    },
+    /// The frame reaches the engine (reassembly, delivery, sync correction).
+    Rx {
+        /// The frame.
+        frame: Frame,
+        /// Its SOF timestamp, local time.
+        sof: Nanos,
+    },
+    /// A transmit completion reaches the engine.
+    TxDone {
+        /// Mailbox.
+        mailbox: Mailbox,
+        /// Result.
+        result: TxResult,
+    },
+}
+
+/// Which handler a job is (for de-duplicating pending interrupts and statistics).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Timer,
+    Rx(usize),
+    Tx,
+    Task,
+    SysTick,
+}
+
+#[derive(Clone, Debug)]
+struct Job {
+    kind: Kind,
+    prio: u8,
+    seq: u64,
+    started: bool,
+    /// Steps still to run: (remaining ns, effect at its end).
+    steps: VecDeque<(Nanos, Effect)>,
+}
+
+/// Figures of one module's CPU over a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CpuStats {
+    /// Time the CPU executed handlers, ns.
+    pub busy_ns: Nanos,
+    /// Slot timer activations whose poll loaded at least one frame.
+    pub txrq_samples: u64,
+    /// Sum of their timer → TXRQ latencies, ns.
+    pub txrq_sum_ns: u64,
+    /// Largest latency, ns.
+    pub txrq_max_ns: Nanos,
+    /// Timer interrupts merged into one already pending (the handler was too late).
+    pub timer_merged: u64,
+    hist: Vec<u32>,
+}
+
+impl Default for CpuStats {
+    fn default() -> Self {
+        CpuStats {
+            busy_ns: 0,
+            txrq_samples: 0,
+            txrq_sum_ns: 0,
+            txrq_max_ns: 0,
+            timer_merged: 0,
+            hist: vec![0; HIST_BINS],
+        }
+    }
+}
+
+impl CpuStats {
+    fn record_txrq(&mut self, ns: Nanos) {
+        self.txrq_samples += 1;
+        self.txrq_sum_ns += ns;
+        self.txrq_max_ns = self.txrq_max_ns.max(ns);
+        let bin = usize::try_from(ns / HIST_BIN_NS)
+            .unwrap_or(usize::MAX)
+            .min(HIST_BINS - 1);
+        if let Some(b) = self.hist.get_mut(bin) {
+            *b += 1;
+        }
+    }
+
+    /// Mean timer → TXRQ latency, ns.
+    pub fn txrq_mean_ns(&self) -> f64 {
+        if self.txrq_samples == 0 {
+            0.0
+        } else {
+            self.txrq_sum_ns as f64 / self.txrq_samples as f64
+        }
+    }
+
+    /// Quantile `q` (0..=1) of the timer → TXRQ latency, ns: the upper edge of the
+    /// histogram bin holding it (never above the exact max).
+    pub fn txrq_quantile_ns(&self, q: f64) -> Nanos {
+        if self.txrq_samples == 0 {
+            return 0;
+        }
+        let rank = ((q * self.txrq_samples as f64).ceil() as u64).max(1);
+        let mut seen = 0u64;
+        for (i, n) in self.hist.iter().enumerate() {
+            seen += u64::from(*n);
+            if seen >= rank {
+                if i + 1 == HIST_BINS {
+                    break; // the overflow bin: only the max is known
+                }
+                return ((i as u64 + 1) * HIST_BIN_NS).min(self.txrq_max_ns);
+            }
+        }
+        self.txrq_max_ns
+    }
+}
+
+/// One module's CPU figures in a run report (docs/SIM.md, `cpu.modules[]`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CpuSummary {
+    /// Module name.
+    pub name: String,
+    /// Fraction of the simulated time the CPU ran handlers (0..=1).
+    pub load: f64,
+    /// Slot timer → TXRQ latency over the activations that loaded a frame: max, ns.
+    pub txrq_max_ns: Nanos,
+    /// The same, 99th percentile (10 ns bins), ns.
+    pub txrq_p99_ns: Nanos,
+    /// The same, mean, ns.
+    pub txrq_mean_ns: f64,
+    /// Activations behind those figures.
+    pub txrq_samples: u64,
+    /// Timer interrupts merged into a pending one.
+    pub timer_merged: u64,
+}
+
+/// The CPU model of a run (design, CPI) and every module's figures.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CpuReport {
+    /// Design name (`prioritised`, `single-priority`).
+    pub design: String,
+    /// Cycles per instruction used.
+    pub cpi: f64,
+    /// Per module, in bus order.
+    pub modules: Vec<CpuSummary>,
+}
+
+impl CpuReport {
+    /// Terminal lines (empty without a model).
+    pub fn text(&self) -> String {
+        if self.modules.is_empty() {
+            return String::new();
+        }
+        let mut s = format!(
+            "CPU model: design {}, CPI {}, {} MHz\nmodule        CPU load  slot->TXRQ max / p99 / mean [us]  samples  timer merged\n",
+            self.design,
+            self.cpi,
+            CLOCK_HZ / 1_000_000
+        );
+        for m in &self.modules {
+            s.push_str(&format!(
+                "{:<12} {:>8.2}%  {:>10.3} / {:.3} / {:.3} {:>14} {:>13}\n",
+                m.name,
+                100.0 * m.load,
+                m.txrq_max_ns as f64 / 1e3,
+                m.txrq_p99_ns as f64 / 1e3,
+                m.txrq_mean_ns / 1e3,
+                m.txrq_samples,
+                m.timer_merged
+            ));
+        }
+        s
+    }
+
+    /// `"cpu":{...}` member for a JSON object (empty without a model).
+    pub fn json_member(&self) -> String {
+        if self.modules.is_empty() {
+            return String::new();
+        }
+        let mods: Vec<String> = self
+            .modules
+            .iter()
+            .map(|m| {
+                format!(
+                    "{{\"name\":\"{}\",\"load\":{:.6},\"slot_to_txrq_ns\":{{\"max\":{},\"p99\":{},\"mean\":{:.1},\"samples\":{}}},\"timer_merged\":{}}}",
+                    m.name.replace('\\', "\\\\").replace('"', "\\\""),
+                    m.load,
+                    m.txrq_max_ns,
+                    m.txrq_p99_ns,
+                    m.txrq_mean_ns,
+                    m.txrq_samples,
+                    m.timer_merged
+                )
+            })
+            .collect();
+        format!(
+            ",\"cpu\":{{\"design\":\"{}\",\"cpi\":{},\"clock_hz\":{},\"modules\":[{}]}}",
+            self.design,
+            self.cpi,
+            CLOCK_HZ,
+            mods.join(",")
+        )
+    }
+}
+
+/// The scheduler state of one module's CPU.
+#[derive(Clone, Debug)]
+pub struct Cpu {
+    model: CpuModel,
+    jobs: Vec<Job>,
+    /// Index in `jobs` of the running job and since when its current step runs.
+    running: Option<(usize, Nanos)>,
+    next_systick: Nanos,
+    seq: u64,
+    /// The slot timer interrupt whose poll has not run yet (or is running): the
+    /// boundary the next TXRQ answers, wherever the poll that loads it runs (the
+    /// single-priority driver also polls at the end of its RX handler).
+    open_boundary: Option<Nanos>,
+    /// Counters.
+    pub stats: CpuStats,
+}
+
+impl Cpu {
+    /// An idle CPU; SysTick's first interrupt one period after time 0.
+    pub fn new(model: CpuModel) -> Cpu {
+        let next_systick = model.table.systick_period_ns;
+        Cpu {
+            model,
+            jobs: Vec::new(),
+            running: None,
+            next_systick,
+            seq: 0,
+            open_boundary: None,
+            stats: CpuStats::default(),
+        }
+    }
+
+    /// The model.
+    pub fn model(&self) -> &CpuModel {
+        &self.model
+    }
+
+    /// Figures after a run of `sim_ns` ns.
+    pub fn summary(&self, name: &str, sim_ns: Nanos) -> CpuSummary {
+        CpuSummary {
+            name: name.to_string(),
+            load: self.stats.busy_ns as f64 / sim_ns.max(1) as f64,
+            txrq_max_ns: self.stats.txrq_max_ns,
+            txrq_p99_ns: self.stats.txrq_quantile_ns(0.99),
+            txrq_mean_ns: self.stats.txrq_mean_ns(),
+            txrq_samples: self.stats.txrq_samples,
+            timer_merged: self.stats.timer_merged,
+        }
+    }
+
+    /// Time of the next step end or SysTick, global ns.
+    pub fn next_event(&self) -> Nanos {
+        let step_end = self.running.and_then(|(j, since)| {
+            let job = self.jobs.get(j)?;
+            job.steps.front().map(|(left, _)| since + left)
+        });
+        step_end.map_or(self.next_systick, |t| t.min(self.next_systick))
+    }
+
+    /// Charges the running job's current step with the time up to `now`.
+    fn account(&mut self, now: Nanos) {
+        if let Some((j, since)) = self.running {
+            let ran = now.saturating_sub(since);
+            if let Some((left, _)) = self.jobs.get_mut(j).and_then(|job| job.steps.front_mut()) {
+                *left = left.saturating_sub(ran);
+            }
+            self.stats.busy_ns += ran;
+            self.running = Some((j, now));
+        }
+    }
+
+    /// Picks the job to run: highest priority; among equals, one already started (it
+    /// was preempted, its frame is on the stack), then the earliest arrival.
+    fn dispatch(&mut self, now: Nanos) {
+        let best = self
+            .jobs
+            .iter()
+            .enumerate()
+            .max_by_key(|(_, j)| (j.prio, j.started, std::cmp::Reverse(j.seq)))
+            .map(|(i, _)| i);
+        if let Some(i) = best {
+            if let Some(j) = self.jobs.get_mut(i) {
+                j.started = true;
+            }
+        }
+        self.running = best.map(|i| (i, now));
+    }
+
+    fn push(&mut self, now: Nanos, kind: Kind, prio: u8, steps: VecDeque<(Nanos, Effect)>) {
+        self.account(now);
+        self.seq += 1;
+        self.jobs.push(Job {
+            kind,
+            prio,
+            seq: self.seq,
+            started: false,
+            steps,
+        });
+        self.dispatch(now);
+    }
+
+    /// A job of `kind` that has not reached its effect yet is pending (a second
+    /// interrupt request of the same source merges into it, as NVIC pending bits do).
+    fn pending(&self, kind: Kind) -> bool {
+        self.jobs.iter().any(|j| {
+            j.kind == kind
+                && j.steps
+                    .iter()
+                    .any(|(_, e)| matches!(e, Effect::Wake | Effect::PopRx { .. }))
+        })
+    }
+
+    /// The slot timer fired (its compare matched) at `now`.
+    pub fn timer(&mut self, now: Nanos) {
+        if self.pending(Kind::Timer) {
+            self.stats.timer_merged += 1;
+            return;
+        }
+        self.open_boundary = Some(now);
+        let m = &self.model;
+        let handler = m.max("isr_slot_timer");
+        let to_txrq = m.max("slot_boundary_to_txrq").min(handler);
+        let mut rest = handler - to_txrq;
+        if m.inline("task_prepare_slot") {
+            rest = rest.saturating_add(m.max("task_prepare_slot"));
+        }
+        let steps = VecDeque::from([
+            (m.ns(to_txrq, 1), Effect::Wake),
+            (m.ns(rest, 0), Effect::None),
+        ]);
+        let prio = m.prio("isr_slot_timer");
+        self.push(now, Kind::Timer, prio, steps);
+    }
+
+    /// A receive FIFO has frames (its interrupt is requested) at `now`.
+    pub fn rx_irq(&mut self, now: Nanos, fifo: usize) {
+        if self.pending(Kind::Rx(fifo)) {
+            return;
+        }
+        // The handler reads the FIFO first; the rest of its path follows the read.
+        let steps = VecDeque::from([(self.model.ns(0, 1), Effect::PopRx { fifo })]);
+        let prio = self.model.prio("isr_can_rx");
+        self.push(now, Kind::Rx(fifo), prio, steps);
+    }
+
+    /// The RX handler read `frame` (step `PopRx` done) at `now`: the rest of the handler,
+    /// then the protocol processing, inside the handler or as a task per the design.
+    pub fn rx_read(&mut self, now: Nanos, frame: Frame, sof: Nanos, sync: bool) {
+        let m = &self.model;
+        let task = if sync {
+            "task_sync_slave"
+        } else {
+            "task_rx_process"
+        };
+        let isr_rest = m.ns(m.max("isr_can_rx"), 0);
+        let work = m.ns(m.max(task), 0);
+        let effect = Effect::Rx { frame, sof };
+        let inline = m.inline(task);
+        let prio = m.prio(task);
+        self.account(now);
+        let Some((j, _)) = self.running else {
+            return;
+        };
+        if let Some(job) = self.jobs.get_mut(j) {
+            if inline {
+                job.steps.push_back((isr_rest + work, effect));
+                return;
+            }
+            job.steps.push_back((isr_rest, Effect::None));
+        }
+        self.push(now, Kind::Task, prio, VecDeque::from([(work, effect)]));
+    }
+
+    /// A transmit interrupt for `mailbox` at `now`.
+    pub fn tx_irq(&mut self, now: Nanos, mailbox: Mailbox, result: TxResult) {
+        let m = &self.model;
+        let steps = VecDeque::from([(
+            m.ns(m.max("isr_can_tx"), 1),
+            Effect::TxDone { mailbox, result },
+        )]);
+        let prio = m.prio("isr_can_tx");
+        self.push(now, Kind::Tx, prio, steps);
+    }
+
+    /// An effect just executed at `now` loaded a mailbox (a TXRQ): if a slot timer
+    /// interrupt is open, this answers it.
+    pub fn loaded(&mut self, now: Nanos) {
+        if let Some(b) = self.open_boundary.take() {
+            self.stats.record_txrq(now.saturating_sub(b));
+        }
+    }
+
+    /// The timer's `Wake` effect ran (whether or not it loaded anything).
+    pub fn wake_done(&mut self) {
+        self.open_boundary = None;
+    }
+
+    /// Advances to `now` (= `next_event()`): raises SysTick when due, finishes the
+    /// running job's step if it is done and returns its effect for the bus to execute.
+    pub fn advance(&mut self, now: Nanos) -> Effect {
+        self.account(now);
+        if now >= self.next_systick {
+            self.next_systick += self.model.table.systick_period_ns.max(1);
+            let m = &self.model;
+            let steps = VecDeque::from([(m.ns(m.max("systick"), 1), Effect::None)]);
+            let prio = m.prio("systick");
+            self.push(now, Kind::SysTick, prio, steps);
+        }
+        let Some((j, _)) = self.running else {
+            return Effect::None;
+        };
+        let Some(job) = self.jobs.get_mut(j) else {
+            return Effect::None;
+        };
+        match job.steps.front() {
+            Some(&(0, effect)) => {
+                job.steps.pop_front();
+                effect
+            }
+            _ => Effect::None,
+        }
+    }
+
+    /// After the bus executed the effect returned by `advance`: retires the running job
+    /// if it has no steps left (spawning the slot preparation after a timer job) and
+    /// dispatches the next.
+    pub fn retire(&mut self, now: Nanos) {
+        let Some((j, _)) = self.running else {
+            return;
+        };
+        let done = self.jobs.get(j).is_some_and(|job| job.steps.is_empty());
+        if !done {
+            return;
+        }
+        let job = self.jobs.swap_remove(j);
+        self.running = None;
+        self.dispatch(now);
+        if job.kind == Kind::Timer && !self.model.inline("task_prepare_slot") {
+            let m = &self.model;
+            let work = m.ns(m.max("task_prepare_slot"), 0);
+            if work > 0 {
+                let prio = m.prio("task_prepare_slot");
+                self.push(
+                    now,
+                    Kind::Task,
+                    prio,
+                    VecDeque::from([(work, Effect::None)]),
+                );
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run_to_effect(cpu: &mut Cpu) -> (Nanos, Effect) {
+        loop {
+            let t = cpu.next_event();
+            let e = cpu.advance(t);
+            if e != Effect::None {
+                return (t, e);
+            }
+            cpu.retire(t);
+        }
+    }
+
+    #[test]
+    fn prioritised_timer_preempts_rx_processing() {
+        let mut cpu = Cpu::new(CpuModel::new(Design::Prioritised, 1.0).unwrap());
+        // An RX interrupt at 0: the FIFO read after the 12-cycle entry (167 ns).
+        cpu.rx_irq(0, 0);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!((t, e), (167, Effect::PopRx { fifo: 0 }));
+        let frame = Frame::new(rtcan_core::CanId::from_raw(0x100).unwrap(), &[1]).unwrap();
+        cpu.rx_read(t, frame, 0, false);
+        cpu.retire(t);
+        // The timer fires while the RX ISR's rest (150 instr) or the task runs: its
+        // TXRQ comes (12 + 120) cycles = 1834 ns after it, whatever runs below it.
+        cpu.timer(1_000);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!(e, Effect::Wake);
+        assert_eq!(t, 1_000 + ((12.0 + 120.0) * 1e9 / 72e6_f64).ceil() as Nanos);
+        cpu.loaded(t);
+        cpu.wake_done();
+        cpu.retire(t);
+        // The frame reaches the engine after the ISR rest and the 600-instruction task.
+        let (t2, e) = run_to_effect(&mut cpu);
+        assert!(matches!(e, Effect::Rx { .. }));
+        let isr = (150.0 * 1e9 / 72e6_f64).ceil() as Nanos;
+        let task = (600.0 * 1e9 / 72e6_f64).ceil() as Nanos;
+        assert_eq!(t2, 167 + isr + task + (t - 1_000));
+        assert_eq!(cpu.stats.txrq_samples, 1);
+        assert_eq!(cpu.stats.txrq_max_ns, t - 1_000);
+    }
+
+    #[test]
+    fn single_priority_timer_waits_for_the_rx_handler() {
+        let mut cpu = Cpu::new(CpuModel::new(Design::SinglePriority, 1.0).unwrap());
+        cpu.rx_irq(0, 0);
+        let (t, _) = run_to_effect(&mut cpu);
+        let frame = Frame::new(rtcan_core::CanId::from_raw(0x100).unwrap(), &[1]).unwrap();
+        cpu.rx_read(t, frame, 0, true);
+        cpu.retire(t);
+        cpu.timer(1_000);
+        let (t_rx, e) = run_to_effect(&mut cpu);
+        assert!(matches!(e, Effect::Rx { .. }), "RX first: same priority");
+        // 5168 + 2497 instructions inside the RX interrupt.
+        assert_eq!(
+            t_rx,
+            167 + ((5168.0 + 2497.0) * 1e9 / 72e6_f64).ceil() as Nanos
+        );
+        cpu.retire(t_rx);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!(e, Effect::Wake);
+        assert_eq!(t, t_rx + ((12.0 + 274.0) * 1e9 / 72e6_f64).ceil() as Nanos);
+        // A second compare while the first is pending merges into it.
+        cpu.timer(t);
+        assert_eq!(cpu.stats.timer_merged, 0, "the first already ran its poll");
+    }
+
+    #[test]
+    fn systick_interrupts_at_its_period_and_is_busy_time() {
+        let mut cpu = Cpu::new(CpuModel::new(Design::Prioritised, 1.0).unwrap());
+        let mut t = 0;
+        while t < 10_500_000 {
+            t = cpu.next_event();
+            let _ = cpu.advance(t);
+            cpu.retire(t);
+        }
+        // 10 SysTicks of (12 + 60) cycles = 1000 ns each.
+        assert_eq!(cpu.stats.busy_ns, 10 * 1_000);
+        assert!(CpuModel::new(Design::Prioritised, 0.0).is_err());
+        assert!(CpuModel::new(Design::Prioritised, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn quantiles_come_from_the_histogram() {
+        let mut s = CpuStats::default();
+        for ns in 1..=100 {
+            s.record_txrq(ns * 100);
+        }
+        assert_eq!(s.txrq_max_ns, 10_000);
+        assert_eq!(s.txrq_quantile_ns(0.99), 9_910);
+        assert_eq!(s.txrq_quantile_ns(0.5), 5_010);
+        assert_eq!(s.txrq_mean_ns(), 5_050.0);
+        s.record_txrq(10_000_000);
+        assert_eq!(s.txrq_quantile_ns(1.0), 10_000_000);
+    }
+}
