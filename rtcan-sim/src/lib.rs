@@ -17,6 +17,7 @@ pub mod clock;
 pub mod compare;
 pub mod controller;
 pub mod cpu;
+pub mod cpu_compare;
 pub mod decode;
 pub mod fixed;
 pub mod ideal;
