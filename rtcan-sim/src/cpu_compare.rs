@@ -71,9 +71,12 @@ fn row(scenario: &'static str, design: &'static str, cpi: f64, run: &Run) -> Row
     }
 }
 
+/// A column of the table: design name (`off`), CPI, the model.
+pub type Model = (&'static str, f64, Option<CpuModel>);
+
 /// The CPU models of the table: off, prioritised at each of `cpis`, single-priority at
 /// each of `cpis`.
-pub fn models(cpis: &[f64]) -> Result<Vec<(&'static str, f64, Option<CpuModel>)>, String> {
+pub fn models(cpis: &[f64]) -> Result<Vec<Model>, String> {
     let mut v = vec![("off", 0.0, None)];
     for d in Design::ALL {
         for &c in cpis {
