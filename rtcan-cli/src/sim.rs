@@ -11,7 +11,7 @@ use rtcan_sim::{candump, paper, report, robot, svg};
 
 const USAGE: &str = "usage: rtcan sim [robot.toml] [--scenario triskar2|rtcan-paper|file.toml] [--seconds N] [--seed S]
                  [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]
-                 [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]";
+                 [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X] [--cpu-cost max|mean]";
 
 struct Args {
     robot: Option<PathBuf>,
@@ -37,6 +37,7 @@ fn parse(args: &[String]) -> Result<Args, String> {
     };
     // The CPU model (rtcan_sim::cpu): on by default, prioritised design, CPI 1.25.
     let (mut cpu_on, mut design, mut cpi) = (true, rtcan_model::costs::Design::Prioritised, 1.25);
+    let mut cost = rtcan_sim::cpu::Cost::Max;
     let mut it = args.iter();
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
@@ -71,6 +72,11 @@ fn parse(args: &[String]) -> Result<Args, String> {
                 ))?;
             }
             "--cpi" => cpi = value("--cpi")?.parse().map_err(|_| "bad --cpi")?,
+            "--cpu-cost" => {
+                let v = value("--cpu-cost")?;
+                cost = rtcan_sim::cpu::Cost::from_name(&v)
+                    .ok_or(format!("--cpu-cost must be `max` or `mean`, not `{v}`"))?;
+            }
             "--json" => a.json = true,
             "--sweep" => a.sweep = true,
             s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
@@ -87,7 +93,7 @@ fn parse(args: &[String]) -> Result<Args, String> {
         return Err("--ber must be in [0, 1)".into());
     }
     a.cfg.cpu = if cpu_on {
-        Some(rtcan_sim::cpu::CpuModel::new(design, cpi)?)
+        Some(rtcan_sim::cpu::CpuModel::new(design, cpi)?.with_cost(cost))
     } else {
         None
     };

@@ -28,60 +28,72 @@ fn check_rejects_a_guard_shorter_than_the_timer_path() {
     let (code, out, err) = rtcan(&["check", "robots/broken/guard-too-short.toml"]);
     assert_eq!(code, 1, "{err}");
     assert!(out.contains("not admissible"));
-    assert!(err.starts_with("error[guard-too-short]: module `main`: worst-case latency from a slot boundary to its TXRQ (2.945 us)"), "{err}");
+    assert!(
+        err.starts_with("error[guard-too-short]: module `main`: worst-case latency from a slot boundary to its TXRQ ("),
+        "{err}"
+    );
     let (code, out, _) = rtcan(&["check", "robot.toml"]);
     assert_eq!(code, 0);
     assert!(out.contains("\ntiming (guard 5 us;"), "{out}");
 }
 
+/// The slot timer's TXRQ latency of the prioritised design with every activation at
+/// `max` or `mean`: 12 + min(slot_boundary_to_txrq, isr_slot_timer) * 1.25 cycles.
+fn txrq_ns(mean: bool) -> u64 {
+    let t = rtcan_model::costs::Design::Prioritised.table().unwrap();
+    let fig = |p: &str| {
+        let c = t.path(p);
+        if mean {
+            c.mean
+        } else {
+            c.max
+        }
+    };
+    let instr = fig("slot_boundary_to_txrq").min(fig("isr_slot_timer"));
+    ((12.0 + f64::from(instr) * 1.25) * 1e9 / 72e6_f64).ceil() as u64
+}
+
 #[test]
 fn sim_reports_the_cpu_model() {
-    let (code, out, err) = rtcan(&["sim", "robot.toml", "--seconds", "1", "--json"]);
-    assert_eq!(code, 0, "{err}");
+    let sim = |extra: &[&str]| {
+        let mut a = vec!["sim", "robot.toml", "--seconds", "1", "--json"];
+        a.extend_from_slice(extra);
+        let (code, out, err) = rtcan(&a);
+        assert_eq!(code, 0, "{err}");
+        out
+    };
+    let out = sim(&[]);
     assert!(
-        out.contains(r#","cpu":{"design":"prioritised","cpi":1.25,"clock_hz":72000000,"modules":[{"name":"gateway","load":"#),
+        out.contains(r#","cpu":{"design":"prioritised","cpi":1.25,"clock_hz":72000000,"cost":"max","modules":[{"name":"gateway","load":"#),
         "{out}"
     );
+    let ns = txrq_ns(false);
     for name in ["gateway", "motor1", "motor2", "motor3", "proximity", "psu"] {
         let at = out.find(&format!(r#"{{"name":"{name}","load":"#)).unwrap();
-        // (12 + 120 * 1.25) cycles at 72 MHz, every activation.
         let tail = &out[at..];
         let m = &tail[..tail.find("}}").unwrap()];
-        assert!(
-            m.contains(r#""slot_to_txrq_ns":{"max":2250,"p99":2250,"mean":2250.0,"#),
-            "{m}"
-        );
+        let want = format!(r#""slot_to_txrq_ns":{{"max":{ns},"p99":{ns},"mean":{ns}.0,"#);
+        assert!(m.contains(&want), "{want} in {m}");
     }
-    let (code, out, _) = rtcan(&[
-        "sim",
-        "robot.toml",
-        "--seconds",
-        "1",
-        "--json",
-        "--cpu",
-        "off",
-    ]);
-    assert_eq!(code, 0);
+    let out = sim(&["--cpu", "off"]);
     assert!(!out.contains(r#""cpu":"#), "no model, no cpu report");
-    let (code, out, _) = rtcan(&[
-        "sim",
-        "robot.toml",
-        "--seconds",
-        "1",
-        "--json",
-        "--cpu-design",
-        "old",
-        "--cpi",
-        "2",
-    ]);
-    assert_eq!(code, 0);
+    let out = sim(&["--cpu-design", "old", "--cpi", "2"]);
     assert!(
-        out.contains(r#""cpu":{"design":"single-priority","cpi":2,"#),
+        out.contains(
+            r#""cpu":{"design":"single-priority","cpi":2,"clock_hz":72000000,"cost":"max","#
+        ),
         "{out}"
     );
     assert!(
         !out.contains(r#""slot_overlaps":0,"#),
         "the old design overlaps slots"
+    );
+    let out = sim(&["--cpu-cost", "mean"]);
+    let ns = txrq_ns(true);
+    assert!(out.contains(r#""cost":"mean""#), "{out}");
+    assert!(
+        out.contains(&format!(r#""slot_to_txrq_ns":{{"max":{ns},"#)),
+        "{out}"
     );
 }
 
@@ -93,6 +105,10 @@ fn sim_rejects_bad_cpu_options() {
         (&["--cpi", "NaN"][..], "--cpi must be in [0.5, 10]"),
         (&["--cpu-design", "fast"][..], "unknown --cpu-design `fast`"),
         (&["--cpu", "maybe"][..], "--cpu must be `on` or `off`"),
+        (
+            &["--cpu-cost", "p99"][..],
+            "--cpu-cost must be `max` or `mean`",
+        ),
     ] {
         let mut a = vec!["sim", "robot.toml", "--seconds", "1"];
         a.extend_from_slice(args);

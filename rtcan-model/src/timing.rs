@@ -192,6 +192,7 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
         ("isr_can_rx", rx_min),
         ("task_rx_process", rx_min),
         ("isr_can_tx", tx_min),
+        ("task_tx_done", tx_min),
         ("task_prepare_slot", bus.slot_ns),
         ("systick", t.systick_period_ns),
     ];
@@ -240,7 +241,8 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
             + per(cost("task_prepare_slot"), bus.slot_ns)
             + per(entry + cost("isr_can_rx") + cost("task_rx_process"), rx_min)
             + per(entry + cost("systick"), t.systick_period_ns)
-            + (entry + cost("isr_can_tx")) * tx_per_cycle / cycle_s.max(1e-12);
+            + (entry + cost("isr_can_tx") + cost("task_tx_done")) * tx_per_cycle
+                / cycle_s.max(1e-12);
         if !m.is_master {
             l += per(cost("task_sync_slave"), bus.cycle_ns);
         }

@@ -26,6 +26,17 @@ fn load(rel: &str) -> Analysis {
     analyze(rel, &read(rel))
 }
 
+/// Worst-case latency of a module without blocking or interference: exception entry plus
+/// the table's `slot_boundary_to_txrq`, at 72 MHz, in whole ns rounded up.
+fn path_ns(t: &CostTable) -> u64 {
+    let cycles = f64::from(t.irq_entry_cycles) + t.cycles(t.path("slot_boundary_to_txrq").max);
+    (cycles * 1e9 / 72e6).ceil() as u64
+}
+
+fn us(ns: u64) -> String {
+    rtcan_model::units::fmt_ns(ns as f64)
+}
+
 /// Diagnostics the check gives `rel` with `table` for every module.
 fn check_with(rel: &str, table: &CostTable) -> Vec<Diagnostic> {
     let a = load(rel);
@@ -67,21 +78,41 @@ fn reference_robots_pass_with_the_prioritised_design() {
 #[test]
 fn prioritised_latency_is_entry_plus_the_txrq_path_exactly() {
     // The slot timer alone at the top priority: no blocking, no interference, so the
-    // latency is (12 + 160 * 1.25) cycles at 72 MHz = 212 cycles = 2944.4 ns, rounded up.
+    // latency is (12 + slot_boundary_to_txrq * 1.25) cycles at 72 MHz, rounded up.
     let new = Design::Prioritised.table().unwrap();
+    assert_eq!(new.cpi, 1.25);
+    assert_eq!(new.irq_entry_cycles, 12);
     let plan = load("robot.toml").plan.unwrap();
     let t = timing::analyze(&plan, Some(&new)).unwrap();
     let gw = &t.modules[0];
     assert_eq!(gw.name, "gateway");
-    assert_eq!(gw.slot_latency_worst_ns, 2_945);
+    assert_eq!(gw.slot_latency_worst_ns, path_ns(&new));
     assert_eq!(gw.blocking_cycles, 0.0);
     assert_eq!(gw.interference_cycles, 0.0);
     assert_eq!(gw.clock_error_ns, 0, "the master defines bus time");
     let m1 = &t.modules[1];
+    assert_eq!(m1.slot_latency_worst_ns, path_ns(&new));
     assert_eq!(m1.clock_error_ns, 2_000, "two bit times at 1 Mbit/s");
     // motor1 accepts the sync (8 B), heartbeats (5 B) and velocity (Twist, 12 B: last
     // fragment 6 B): the shortest is the heartbeat, 54 + 40 + 13 = 107 bits.
     assert_eq!(m1.rx_frame_min_ns, 107_000);
+    // Its load: per 107 us frame the RX interrupt and task, per slot the timer and the
+    // preparation, per cycle the sync, its frames, SysTick; every activation + 12 cycles.
+    let c = |p: &str| new.cycles(new.path(p).max);
+    // Frames per 10 ms cycle: heartbeat every 10 cycles, encoder1 (200 Hz, 1 frame),
+    // wheel_setpoints (100 Hz, 2 frames).
+    let tx_per_cycle = 0.1 + 2.0 * 1.0 + 1.0 * 2.0;
+    let per_s = (12.0 + c("isr_can_rx") + c("task_rx_process")) / 107e-6
+        + (12.0 + c("isr_slot_timer") + c("task_prepare_slot")) / 166_666e-9
+        + c("task_sync_slave") / 9_999_960e-9
+        + (12.0 + c("isr_can_tx") + c("task_tx_done")) * tx_per_cycle / 9_999_960e-9
+        + (12.0 + c("systick")) / 1e-3;
+    assert!(
+        (m1.cpu_load - per_s / 72e6).abs() < 1e-9,
+        "{} vs {}",
+        m1.cpu_load,
+        per_s / 72e6
+    );
 }
 
 #[test]
@@ -157,6 +188,7 @@ error: 2 errors in robot.toml
 
 #[test]
 fn a_one_microsecond_guard_is_rejected_by_analyze() {
+    let lat = path_ns(&Design::Prioritised.table().unwrap());
     let src = read("robot.toml").replace("guard = \"5us\"", "guard = \"1us\"");
     let a = analyze("robot.toml", &src);
     assert_eq!(a.status(), Status::NotAdmissible);
@@ -166,22 +198,26 @@ fn a_one_microsecond_guard_is_rejected_by_analyze() {
     let first = &a.diagnostics.items[0];
     assert_eq!(
         first.message,
-        "module `gateway`: worst-case latency from a slot boundary to its TXRQ (2.945 us) plus its clock error bound (0 ns) is 2.945 us, more than the guard (1 us)"
+        format!("module `gateway`: worst-case latency from a slot boundary to its TXRQ ({}) plus its clock error bound (0 ns) is {}, more than the guard (1 us)", us(lat), us(lat))
     );
     assert_eq!(
         first.help,
-        vec!["set `guard = \"2.945us\"` in `[bus]` (the 166.666 us slot still holds the 160 us frame plus that guard)".to_string()]
+        vec![format!("set `guard = \"{}\"` in `[bus]` (the 166.666 us slot still holds the 160 us frame plus that guard)", us(lat).replace(' ', ""))]
     );
-    // Exactly the bound passes: the slaves need 2.945 + 2 us.
-    let src = read("robot.toml").replace("guard = \"5us\"", "guard = \"4.945us\"");
-    assert_eq!(analyze("robot.toml", &src).status(), Status::Admissible);
-    let src = read("robot.toml").replace("guard = \"5us\"", "guard = \"4.944us\"");
-    let a = analyze("robot.toml", &src);
+    // Exactly the bound passes: the slaves need the latency + 2 us.
+    let at = |g: u64| read("robot.toml").replace("guard = \"5us\"", &format!("guard = \"{g}ns\""));
+    assert_eq!(
+        analyze("robot.toml", &at(lat + 2_000)).status(),
+        Status::Admissible
+    );
+    let a = analyze("robot.toml", &at(lat + 1_999));
     assert_eq!(
         a.diagnostics.items.len(),
         5,
         "the five slaves, not the master"
     );
+    let a = analyze("robot.toml", &at(lat - 1));
+    assert_eq!(a.diagnostics.items.len(), 6, "and the master");
 }
 
 #[test]
@@ -197,32 +233,59 @@ fn json_has_the_timing_fields_exactly() {
         keys.sort_unstable();
         assert_eq!(keys, ["cpu_load", "name", "slot_latency_worst_ns"]);
     }
+    let lat = path_ns(&Design::Prioritised.table().unwrap());
     assert_eq!(mods[0]["name"], "gateway");
-    assert_eq!(mods[0]["slot_latency_worst_ns"], 2_945);
+    assert_eq!(mods[0]["slot_latency_worst_ns"], lat);
     let text = report::text(&load("robot.toml").plan.unwrap());
     assert!(text.contains("\ntiming (guard 5 us;"), "{text}");
-    assert!(text.contains("  motor1               2.945 us         2 us        55 ns"));
+    let row = format!(
+        "  {:<16} {:>12} {:>12} {:>12}",
+        "motor1",
+        us(lat),
+        "2 us",
+        us(5_000 - 2_000 - lat)
+    );
+    assert!(text.contains(&row), "{row}\n{text}");
 }
 
 #[test]
 fn latency_grows_with_the_cpi_and_interference_is_counted_per_arrival() {
     let base = Design::Prioritised.table().unwrap();
+    let txrq = f64::from(base.path("slot_boundary_to_txrq").max);
     let plan = load("robot.toml").plan.unwrap();
-    let at = |cpi: f64| {
-        timing::analyze(&plan, Some(&base.clone().with_cpi(cpi)))
-            .unwrap()
-            .modules[0]
-            .slot_latency_worst_ns
-    };
-    assert_eq!(at(1.0), ((12.0 + 160.0) * 1e9 / 72e6_f64).ceil() as u64);
-    assert_eq!(at(2.0), ((12.0 + 320.0) * 1e9 / 72e6_f64).ceil() as u64);
-    // RX at the timer's priority + 1: it preempts, so it interferes instead of blocking.
-    let text = rtcan_model::costs::PRIORITISED_TOML.replace(
-        "max = 150\nmean = 120\nsamples = 0\npriority = 3",
-        "max = 150\nmean = 120\nsamples = 0\npriority = 5",
+    let at = |t: &CostTable| timing::analyze(&plan, Some(t)).unwrap().modules[0].clone();
+    let ns = |cycles: f64| (cycles * 1e9 / 72e6_f64).ceil() as u64;
+    assert_eq!(
+        at(&base.clone().with_cpi(1.0)).slot_latency_worst_ns,
+        ns(12.0 + txrq)
     );
-    let t = CostTable::parse(&text).unwrap();
-    let m = &timing::analyze(&plan, Some(&t)).unwrap().modules[0];
-    assert_eq!(m.interference_cycles, 12.0 + 150.0 * 1.25);
+    assert_eq!(
+        at(&base.clone().with_cpi(2.0)).slot_latency_worst_ns,
+        ns(12.0 + 2.0 * txrq)
+    );
+    // RX above the timer's priority: it preempts, so it interferes (once: its period,
+    // the 83 us odometry fragment, is longer than the latency) instead of never.
+    let mut t = base.clone();
+    for (name, p) in &mut t.paths {
+        if name == "isr_can_rx" {
+            p.priority = Some(5);
+        }
+    }
+    let m = at(&t);
+    let rx = f64::from(base.path("isr_can_rx").max);
+    assert_eq!(m.interference_cycles, 12.0 + rx * 1.25);
     assert_eq!(m.blocking_cycles, 0.0);
+    assert_eq!(
+        m.slot_latency_worst_ns,
+        ns(12.0 + txrq * 1.25 + 12.0 + rx * 1.25)
+    );
+    // At the timer's own priority it blocks instead: one whole activation.
+    for (name, p) in &mut t.paths {
+        if name == "isr_can_rx" {
+            p.priority = Some(4);
+        }
+    }
+    let m = at(&t);
+    assert_eq!(m.blocking_cycles, 12.0 + rx * 1.25);
+    assert_eq!(m.interference_cycles, 0.0);
 }

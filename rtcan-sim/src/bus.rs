@@ -301,6 +301,7 @@ impl<M: Module> Bus<M> {
             if let Some((cpu, _)) = &n.cpu {
                 r.design = cpu.model().design.name().to_string();
                 r.cpi = cpu.model().table.cpi;
+                r.cost = cpu.model().cost.name();
                 r.modules.push(cpu.summary(&name(i), self.now));
             }
         }
@@ -610,7 +611,7 @@ impl<M: Module> Bus<M> {
         };
         let loads = self.nodes.get(n).map_or(0, |node| node.can.stats.loads);
         match effect {
-            Effect::None => {}
+            Effect::None | Effect::Spawn { .. } => {}
             Effect::Wake => {
                 self.callback(n, |m, now, can| m.wake(now, can));
             }

@@ -26,6 +26,32 @@ const HIST_BIN_NS: u64 = 10;
 /// Bins of the histogram (200 µs; longer latencies count in the last bin, max is exact).
 const HIST_BINS: usize = 20_000;
 
+/// Which figure of a path every activation costs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cost {
+    /// The measured maximum, every time: a stress bound (the longest paths all at once).
+    Max,
+    /// The measured mean: the typical load.
+    Mean,
+}
+
+impl Cost {
+    /// Name on the command line.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Cost::Max => "max",
+            Cost::Mean => "mean",
+        }
+    }
+
+    /// Parses `max` or `mean`.
+    pub fn from_name(name: &str) -> Option<Cost> {
+        [Cost::Max, Cost::Mean]
+            .into_iter()
+            .find(|c| c.name() == name)
+    }
+}
+
 /// The CPU model of one module: a design's cost table at a CPI.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CpuModel {
@@ -33,6 +59,8 @@ pub struct CpuModel {
     pub table: CostTable,
     /// Design, for reports.
     pub design: Design,
+    /// Figure charged per activation.
+    pub cost: Cost,
 }
 
 impl CpuModel {
@@ -44,7 +72,14 @@ impl CpuModel {
         Ok(CpuModel {
             table: design.table()?.with_cpi(cpi),
             design,
+            cost: Cost::Max,
         })
+    }
+
+    /// The same model charging `cost` per activation.
+    pub fn with_cost(mut self, cost: Cost) -> CpuModel {
+        self.cost = cost;
+        self
     }
 
     /// Time of `instructions` plus `entries` exception entries, ns (rounded up).
@@ -54,8 +89,13 @@ impl CpuModel {
         (cycles * 1e9 / f64::from(CLOCK_HZ)).ceil() as Nanos
     }
 
+    /// Instructions of one activation of `path`.
     fn max(&self, path: &str) -> u32 {
-        self.table.path(path).max
+        let p = self.table.path(path);
+        match self.cost {
+            Cost::Max => p.max,
+            Cost::Mean => p.mean,
+        }
     }
 
     fn prio(&self, path: &str) -> u8 {
@@ -86,6 +126,18 @@ pub enum Effect {
         frame: Frame,
         /// Its SOF timestamp, local time.
         sof: Nanos,
+    },
+    /// Internal (never returned by `advance`): the TX handler queues its completion for
+    /// the protocol task, which runs `ns` at `prio` and then has the `TxDone` effect.
+    Spawn {
+        /// The task's run time, ns.
+        ns: Nanos,
+        /// Its priority.
+        prio: u8,
+        /// Mailbox.
+        mailbox: Mailbox,
+        /// Result.
+        result: TxResult,
     },
     /// A transmit completion reaches the engine.
     TxDone {
@@ -214,6 +266,8 @@ pub struct CpuReport {
     pub design: String,
     /// Cycles per instruction used.
     pub cpi: f64,
+    /// `max` or `mean` per activation.
+    pub cost: &'static str,
     /// Per module, in bus order.
     pub modules: Vec<CpuSummary>,
 }
@@ -225,10 +279,11 @@ impl CpuReport {
             return String::new();
         }
         let mut s = format!(
-            "CPU model: design {}, CPI {}, {} MHz\nmodule        CPU load  slot->TXRQ max / p99 / mean [us]  samples  timer merged\n",
+            "CPU model: design {}, CPI {}, {} MHz, {} path costs\nmodule        CPU load  slot->TXRQ max / p99 / mean [us]  samples  timer merged\n",
             self.design,
             self.cpi,
-            CLOCK_HZ / 1_000_000
+            CLOCK_HZ / 1_000_000,
+            self.cost
         );
         for m in &self.modules {
             s.push_str(&format!(
@@ -267,10 +322,11 @@ impl CpuReport {
             })
             .collect();
         format!(
-            ",\"cpu\":{{\"design\":\"{}\",\"cpi\":{},\"clock_hz\":{},\"modules\":[{}]}}",
+            ",\"cpu\":{{\"design\":\"{}\",\"cpi\":{},\"clock_hz\":{},\"cost\":\"{}\",\"modules\":[{}]}}",
             self.design,
             self.cpi,
             CLOCK_HZ,
+            self.cost,
             mods.join(",")
         )
     }
@@ -449,14 +505,27 @@ impl Cpu {
         self.push(now, Kind::Task, prio, VecDeque::from([(work, effect)]));
     }
 
-    /// A transmit interrupt for `mailbox` at `now`.
+    /// A transmit interrupt for `mailbox` at `now`: the handler, then the completion
+    /// reaches the engine inside it or in the protocol task (`task_tx_done`), per design.
     pub fn tx_irq(&mut self, now: Nanos, mailbox: Mailbox, result: TxResult) {
         let m = &self.model;
-        let steps = VecDeque::from([(
-            m.ns(m.max("isr_can_tx"), 1),
-            Effect::TxDone { mailbox, result },
-        )]);
+        let effect = Effect::TxDone { mailbox, result };
+        let isr = m.max("isr_can_tx");
+        let task = m.max("task_tx_done");
         let prio = m.prio("isr_can_tx");
+        if task == 0 || m.inline("task_tx_done") {
+            let steps = VecDeque::from([(m.ns(isr.saturating_add(task), 1), effect)]);
+            self.push(now, Kind::Tx, prio, steps);
+            return;
+        }
+        // The handler queues the completion at its end; the protocol task takes it.
+        let spawn = Effect::Spawn {
+            ns: m.ns(task, 0),
+            prio: m.prio("task_tx_done"),
+            mailbox,
+            result,
+        };
+        let steps = VecDeque::from([(m.ns(isr, 1), spawn)]);
         self.push(now, Kind::Tx, prio, steps);
     }
 
@@ -491,6 +560,20 @@ impl Cpu {
             return Effect::None;
         };
         match job.steps.front() {
+            Some(&(
+                0,
+                Effect::Spawn {
+                    ns,
+                    prio,
+                    mailbox,
+                    result,
+                },
+            )) => {
+                job.steps.pop_front();
+                let steps = VecDeque::from([(ns, Effect::TxDone { mailbox, result })]);
+                self.push(now, Kind::Task, prio, steps);
+                Effect::None
+            }
             Some(&(0, effect)) => {
                 job.steps.pop_front();
                 effect
@@ -544,9 +627,75 @@ mod tests {
         }
     }
 
+    /// A prioritised table with round numbers, so the expected times are plain sums.
+    const TEST_TABLE: &str = r#"
+design = "prioritised"
+source = "test"
+cpi = 1.0
+irq_entry_cycles = 12
+systick_period_ns = 1000000
+[paths.isr_slot_timer]
+max = 100
+mean = 50
+samples = 1
+priority = 4
+[paths.slot_boundary_to_txrq]
+max = 80
+mean = 40
+samples = 1
+[paths.isr_can_rx]
+max = 150
+mean = 150
+samples = 1
+priority = 3
+[paths.isr_can_tx]
+max = 50
+mean = 50
+samples = 1
+priority = 3
+[paths.task_rx_process]
+max = 600
+mean = 300
+samples = 1
+priority = 2
+[paths.task_sync_slave]
+max = 900
+mean = 900
+samples = 1
+priority = 2
+[paths.task_prepare_slot]
+max = 300
+mean = 100
+samples = 1
+priority = 2
+[paths.task_tx_done]
+max = 200
+mean = 100
+samples = 1
+priority = 2
+[paths.systick]
+max = 60
+mean = 60
+samples = 1
+priority = 1
+"#;
+
+    fn test_model(cost: Cost) -> CpuModel {
+        CpuModel {
+            table: CostTable::parse(TEST_TABLE).unwrap(),
+            design: Design::Prioritised,
+            cost,
+        }
+    }
+
+    /// ns of `cycles` at 72 MHz, rounded up as the model does.
+    fn ns(cycles: f64) -> Nanos {
+        (cycles * 1e9 / 72e6).ceil() as Nanos
+    }
+
     #[test]
     fn prioritised_timer_preempts_rx_processing() {
-        let mut cpu = Cpu::new(CpuModel::new(Design::Prioritised, 1.0).unwrap());
+        let mut cpu = Cpu::new(test_model(Cost::Max));
         // An RX interrupt at 0: the FIFO read after the 12-cycle entry (167 ns).
         cpu.rx_irq(0, 0);
         let (t, e) = run_to_effect(&mut cpu);
@@ -554,23 +703,49 @@ mod tests {
         let frame = Frame::new(rtcan_core::CanId::from_raw(0x100).unwrap(), &[1]).unwrap();
         cpu.rx_read(t, frame, 0, false);
         cpu.retire(t);
-        // The timer fires while the RX ISR's rest (150 instr) or the task runs: its
-        // TXRQ comes (12 + 120) cycles = 1834 ns after it, whatever runs below it.
+        // The timer fires at 1000 while the RX ISR's rest (150 instr) runs: its TXRQ
+        // comes 12 + min(80, 100) cycles after it.
         cpu.timer(1_000);
         let (t, e) = run_to_effect(&mut cpu);
         assert_eq!(e, Effect::Wake);
-        assert_eq!(t, 1_000 + ((12.0 + 120.0) * 1e9 / 72e6_f64).ceil() as Nanos);
+        assert_eq!(t, 1_000 + ns(92.0));
         cpu.loaded(t);
         cpu.wake_done();
         cpu.retire(t);
-        // The frame reaches the engine after the ISR rest and the 600-instruction task.
+        // Then the rest of the timer (20), the rest of the RX ISR, and the RX task (600)
+        // before the preparation task spawned after the timer (same priority, later).
         let (t2, e) = run_to_effect(&mut cpu);
         assert!(matches!(e, Effect::Rx { .. }));
-        let isr = (150.0 * 1e9 / 72e6_f64).ceil() as Nanos;
-        let task = (600.0 * 1e9 / 72e6_f64).ceil() as Nanos;
-        assert_eq!(t2, 167 + isr + task + (t - 1_000));
+        let isr_end = 167 + ns(150.0) + ns(92.0) + ns(20.0);
+        assert_eq!(t2, isr_end + ns(600.0));
         assert_eq!(cpu.stats.txrq_samples, 1);
-        assert_eq!(cpu.stats.txrq_max_ns, t - 1_000);
+        assert_eq!(cpu.stats.txrq_max_ns, ns(92.0));
+        // The mean model charges the means: the TXRQ after 12 + min(40, 50) cycles.
+        let mut cpu = Cpu::new(test_model(Cost::Mean));
+        cpu.timer(0);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!((t, e), (ns(52.0), Effect::Wake));
+    }
+
+    #[test]
+    fn tx_completion_reaches_the_engine_from_the_task() {
+        let mut cpu = Cpu::new(test_model(Cost::Max));
+        cpu.tx_irq(0, Mailbox(1), TxResult::Sent);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!(
+            e,
+            Effect::TxDone {
+                mailbox: Mailbox(1),
+                result: TxResult::Sent
+            }
+        );
+        // ISR (12 + 50) then the task (200), nothing else pending.
+        assert_eq!(t, ns(62.0) + ns(200.0));
+        // A second timer request while the first has not run its poll merges into it.
+        cpu.retire(t);
+        cpu.timer(t);
+        cpu.timer(t + 10);
+        assert_eq!(cpu.stats.timer_merged, 1);
     }
 
     #[test]
