@@ -1,17 +1,19 @@
-//! Per-path CPU cost tables (instructions per firmware path, RTIC priorities, CPI bound),
-//! the input of the build-time timing check (`timing.rs`) and of the simulator's CPU
-//! model. The tables are committed TOML files under `rtcan-model/costs/`, embedded here
-//! so that build.rs and the proc macro have them without reading files at build time.
-//! Format: docs/ROBOT_TOML.md, "Timing check".
+//! Per-path CPU cost tables (instructions per firmware path, RTIC priorities), the
+//! input of the build-time timing check (`timing.rs`) and of the simulator's CPU model.
+//! The tables are committed TOML files, embedded here so that build.rs and the proc macro
+//! have them without reading files at build time: `boards/costs/cortex-m3.toml`, generated
+//! by `scripts/update-costs.sh` from the QEMU rows of `bash boards/run-qemu.sh`, and
+//! `rtcan-model/costs/cortex-m3-single-priority.toml` (the design before issue 10, in the
+//! same format). Format: docs/ROBOT_TOML.md, "Timing check".
 use crate::syntax::{self, Entry, Kind};
 
 /// The firmware design of issue 10: slot timer on top doing only precomputed work.
-pub const PRIORITISED_TOML: &str = include_str!("../costs/cortex-m3.toml");
+pub const PRIORITISED_TOML: &str = include_str!("../../boards/costs/cortex-m3.toml");
 /// The design before issue 10: every handler at one priority (kept for the before/after).
 pub const SINGLE_PRIORITY_TOML: &str = include_str!("../costs/cortex-m3-single-priority.toml");
 
-/// The paths a table must give, as named by `bash boards/run-qemu.sh` (plus `systick`).
-pub const PATHS: [&str; 8] = [
+/// The paths a table must give, as named by `bash boards/run-qemu.sh`.
+pub const PATHS: [&str; 7] = [
     "isr_slot_timer",
     "isr_can_rx",
     "isr_can_tx",
@@ -19,8 +21,20 @@ pub const PATHS: [&str; 8] = [
     "task_sync_slave",
     "task_prepare_slot",
     "slot_boundary_to_txrq",
-    "systick",
 ];
+
+/// Cycles per instruction bound when `[meta]` gives none (issue 10): F103 flash at 72 MHz
+/// has 2 wait states; the prefetch buffer hides them on straight-line code, taken
+/// branches and literal loads do not.
+pub const DEFAULT_CPI: f64 = 1.25;
+/// Cortex-M3 exception entry (stacking), cycles, when `[meta]` gives none: instruction
+/// counts do not see it.
+pub const DEFAULT_IRQ_ENTRY_CYCLES: u32 = 12;
+/// The monotonic's SysTick period when `[meta]` gives none (1 kHz).
+pub const DEFAULT_SYSTICK_PERIOD_NS: u64 = 1_000_000;
+/// Instructions of the SysTick handler when the table has no `systick` row: an ESTIMATE
+/// (rtic-monotonics' handler: counter update and queue check), not a measurement.
+pub const SYSTICK_ESTIMATE: u32 = 60;
 
 /// Which firmware interrupt design a table describes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -54,10 +68,15 @@ impl Design {
 
     /// The embedded cost table of this design.
     pub fn table(self) -> Result<CostTable, String> {
-        match self {
+        let mut t = match self {
             Design::Prioritised => CostTable::parse(PRIORITISED_TOML),
             Design::SinglePriority => CostTable::parse(SINGLE_PRIORITY_TOML),
+        }?;
+        if t.design.is_empty() {
+            // The generated table is the firmware's own design; it does not name it.
+            t.design = self.name().to_string();
         }
+        Ok(t)
     }
 }
 
@@ -82,10 +101,12 @@ pub struct PathCost {
 /// A cost table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CostTable {
-    /// Design name (`design` key).
+    /// Design name (`[meta] design`; empty when not given).
     pub design: String,
-    /// Where the figures come from (`source` key).
+    /// Where the figures come from (`[meta] source`, else the measured robot).
     pub source: String,
+    /// Core clock the figures are for, Hz (`[meta] cpu_hz`).
+    pub clock_hz: u32,
     /// Cycles per instruction bound.
     pub cpi: f64,
     /// Exception entry, cycles.
@@ -97,30 +118,57 @@ pub struct CostTable {
 }
 
 impl CostTable {
-    /// Parses a table; every path of [`PATHS`] must be present, every value in range.
+    /// Parses a table; every path of [`PATHS`] and every priority must be present, every
+    /// value in range. Handler rows take their priority from `[priorities]` (`task_*` rows
+    /// from `task_protocol`) unless the row has its own `priority`.
     pub fn parse(text: &str) -> Result<CostTable, String> {
         let root = syntax::parse(text).map_err(|e| e.first_line())?;
         let Kind::Table(top) = root.kind else {
             return Err("a cost table is a TOML table".into());
         };
-        let str_key = |k: &str| match find(&top, k) {
-            Some(Kind::Str(s)) => Ok(s.clone()),
-            _ => Err(format!("cost table: `{k}` must be a string")),
+        let Some(Kind::Table(meta)) = find(&top, "meta") else {
+            return Err("cost table: `[meta]` missing".into());
         };
-        let int_key = |k: &str, lo: i64, hi: i64| match find(&top, k) {
-            Some(Kind::Int(v)) if (lo..=hi).contains(v) => Ok(*v),
-            _ => Err(format!(
-                "cost table: `{k}` must be an integer in {lo}..={hi}"
-            )),
-        };
-        let cpi = match find(&top, "cpi") {
-            Some(Kind::Float(v)) if (0.5..=10.0).contains(v) => *v,
-            Some(Kind::Int(v)) if (1..=10).contains(v) => *v as f64,
-            _ => return Err("cost table: `cpi` must be a number in 0.5..=10".into()),
+        let Some(Kind::Table(prios)) = find(&top, "priorities") else {
+            return Err("cost table: `[priorities]` missing".into());
         };
         let Some(Kind::Table(paths)) = find(&top, "paths") else {
             return Err("cost table: `[paths]` missing".into());
         };
+        let opt_str = |k: &str| match find(meta, k) {
+            None => Ok(None),
+            Some(Kind::Str(s)) => Ok(Some(s.clone())),
+            Some(_) => Err(format!("cost table: `meta.{k}` must be a string")),
+        };
+        let opt_int = |k: &str, lo: i64, hi: i64| match find(meta, k) {
+            None => Ok(None),
+            Some(Kind::Int(v)) if (lo..=hi).contains(v) => Ok(Some(*v)),
+            Some(_) => Err(format!(
+                "cost table: `meta.{k}` must be an integer in {lo}..={hi}"
+            )),
+        };
+        let clock_hz = opt_int("cpu_hz", 1_000_000, 1_000_000_000)?
+            .ok_or("cost table: `meta.cpu_hz` missing")? as u32;
+        let cpi = match find(meta, "cpi") {
+            None => DEFAULT_CPI,
+            Some(Kind::Float(v)) if (0.5..=10.0).contains(v) => *v,
+            Some(Kind::Int(v)) if (1..=10).contains(v) => *v as f64,
+            Some(_) => return Err("cost table: `meta.cpi` must be a number in 0.5..=10".into()),
+        };
+        let prio_of = |k: &str| match find(prios, k) {
+            Some(Kind::Int(v)) if (0..=255).contains(v) => Ok(*v as u8),
+            Some(_) => Err(format!("cost table: `priorities.{k}` must be in 0..=255")),
+            None => Err(format!("cost table: `priorities.{k}` missing")),
+        };
+        for k in [
+            "isr_slot_timer",
+            "isr_can_rx",
+            "isr_can_tx",
+            "task_protocol",
+            "systick",
+        ] {
+            prio_of(k)?;
+        }
         let mut out = Vec::new();
         for e in paths {
             let Kind::Table(p) = &e.value.kind else {
@@ -134,7 +182,6 @@ impl CostTable {
                 )),
             };
             let priority = match find(p, "priority") {
-                None => None,
                 Some(Kind::Int(v)) if (0..=255).contains(v) => Some(*v as u8),
                 Some(_) => {
                     return Err(format!(
@@ -142,6 +189,9 @@ impl CostTable {
                         e.key
                     ))
                 }
+                None if e.key.starts_with("task_") => Some(prio_of("task_protocol")?),
+                None if e.key.starts_with("isr_") || e.key == "systick" => Some(prio_of(&e.key)?),
+                None => None,
             };
             let runs_in = match find(p, "runs_in") {
                 None => None,
@@ -178,20 +228,38 @@ impl CostTable {
             ));
         }
         for name in PATHS {
-            match out.iter().find(|(n, _)| n == name) {
-                None => return Err(format!("cost table: path `{name}` missing")),
-                Some((_, p)) if p.priority.is_none() && name != "slot_boundary_to_txrq" => {
-                    return Err(format!("cost table: path `{name}` needs a `priority`"));
-                }
-                _ => {}
+            if !out.iter().any(|(n, _)| n == name) {
+                return Err(format!("cost table: path `{name}` missing"));
             }
         }
+        if !out.iter().any(|(n, _)| n == "systick") {
+            out.push((
+                "systick".into(),
+                PathCost {
+                    max: SYSTICK_ESTIMATE,
+                    mean: SYSTICK_ESTIMATE,
+                    samples: 0,
+                    priority: Some(prio_of("systick")?),
+                    runs_in: None,
+                },
+            ));
+        }
+        let source = match opt_str("source")? {
+            Some(s) => s,
+            None => format!(
+                "QEMU -icount over {} (scripts/update-costs.sh)",
+                opt_str("robot")?.unwrap_or_else(|| "?".into())
+            ),
+        };
         Ok(CostTable {
-            design: str_key("design")?,
-            source: str_key("source")?,
+            design: opt_str("design")?.unwrap_or_default(),
+            source,
+            clock_hz,
             cpi,
-            irq_entry_cycles: int_key("irq_entry_cycles", 0, 1000)? as u32,
-            systick_period_ns: int_key("systick_period_ns", 1_000, 1_000_000_000)? as u64,
+            irq_entry_cycles: opt_int("irq_entry_cycles", 0, 1000)?
+                .map_or(DEFAULT_IRQ_ENTRY_CYCLES, |v| v as u32),
+            systick_period_ns: opt_int("systick_period_ns", 1_000, 1_000_000_000)?
+                .map_or(DEFAULT_SYSTICK_PERIOD_NS, |v| v as u64),
             paths: out,
         })
     }
@@ -252,44 +320,64 @@ mod tests {
     fn embedded_tables_parse_with_every_path() {
         for d in Design::ALL {
             let t = d.table().unwrap();
-            assert_eq!(t.design, d.name());
-            for p in PATHS {
+            for p in PATHS.iter().chain(&["systick"]) {
                 assert!(t.paths.iter().any(|(n, _)| n == p), "{p}");
             }
+            assert_eq!(t.clock_hz, 72_000_000);
+            assert_eq!(t.cpi, DEFAULT_CPI);
+            assert_eq!(t.irq_entry_cycles, 12);
         }
         let new = Design::Prioritised.table().unwrap();
-        assert_eq!(new.cpi, 1.25);
         assert!(new.priority("isr_slot_timer") > new.priority("isr_can_rx"));
+        assert!(new.priority("isr_can_rx") > new.priority("task_rx_process"));
+        assert!(new.priority("task_rx_process") > new.priority("systick"));
+        assert_eq!(new.path("slot_boundary_to_txrq").priority, None);
+        assert_eq!(new.path("systick").max, SYSTICK_ESTIMATE, "not measured");
+        assert_eq!(new.handler_max("isr_can_rx"), new.path("isr_can_rx").max);
         let old = Design::SinglePriority.table().unwrap();
+        assert_eq!(old.design, "single-priority");
         assert_eq!(old.handler_max("isr_can_rx"), 3766 + 2497 + 1402);
         assert_eq!(old.path("task_sync_slave").runs_in, Some("isr_can_rx"));
-        assert_eq!(new.handler_max("isr_can_rx"), 150);
         assert_eq!(old.priority("isr_slot_timer"), old.priority("isr_can_rx"));
+        assert!(old.priority("systick") > old.priority("isr_slot_timer"));
     }
+
+    const MINIMAL: &str = "[meta]\ncpu_hz = 72000000\n[priorities]\nisr_slot_timer = 4\nisr_can_rx = 3\nisr_can_tx = 3\ntask_protocol = 2\nsystick = 0\n[paths.isr_slot_timer]\nmax = 100\nmean = 50\nsamples = 1\n[paths.isr_can_rx]\nmax = 70\nmean = 70\nsamples = 1\n[paths.isr_can_tx]\nmax = 50\nmean = 50\nsamples = 1\n[paths.task_rx_process]\nmax = 600\nmean = 300\nsamples = 1\n[paths.task_sync_slave]\nmax = 900\nmean = 900\nsamples = 1\n[paths.task_prepare_slot]\nmax = 300\nmean = 100\nsamples = 1\n[paths.slot_boundary_to_txrq]\nmax = 80\nmean = 40\nsamples = 1\n";
 
     #[test]
     fn bad_tables_are_errors_not_panics() {
-        let good = PRIORITISED_TOML;
+        let good = CostTable::parse(MINIMAL).unwrap();
+        assert_eq!(good.priority("task_sync_slave"), 2, "from task_protocol");
+        assert_eq!(good.source, "QEMU -icount over ? (scripts/update-costs.sh)");
         assert!(CostTable::parse("not toml [").is_err());
-        let no_rx = good.replace("[paths.isr_can_rx]", "[paths.isr_can_rx_typo]");
+        let no_rx = MINIMAL.replace("[paths.isr_can_rx]", "[paths.isr_can_rx_typo]");
         assert_eq!(
             CostTable::parse(&no_rx).unwrap_err(),
-            "cost table: path `isr_can_rx` missing"
+            "cost table: `priorities.isr_can_rx_typo` missing"
         );
-        let neg = good.replace("max = 150", "max = -150");
+        let no_sync = MINIMAL.replace("[paths.task_sync_slave]", "[paths.task_sync]");
+        assert_eq!(
+            CostTable::parse(&no_sync).unwrap_err(),
+            "cost table: path `task_sync_slave` missing"
+        );
+        let no_prio = MINIMAL.replace("task_protocol = 2\n", "");
+        assert_eq!(
+            CostTable::parse(&no_prio).unwrap_err(),
+            "cost table: `priorities.task_protocol` missing"
+        );
+        let neg = MINIMAL.replace("max = 70", "max = -70");
         assert!(CostTable::parse(&neg)
             .unwrap_err()
             .contains("isr_can_rx.max"));
-        let mean_above = good.replace("max = 150", "max = 10");
+        let mean_above = MINIMAL.replace("max = 70", "max = 10");
         assert!(CostTable::parse(&mean_above)
             .unwrap_err()
             .contains("mean above max"));
-        let cpi = good.replace("cpi = 1.25", "cpi = 0.0");
+        let cpi = MINIMAL.replace("cpu_hz = 72000000\n", "cpu_hz = 72000000\ncpi = 0.0\n");
         assert!(CostTable::parse(&cpi).unwrap_err().contains("cpi"));
-        let runs_in = good.replace(
-            "priority = 1\n",
-            "priority = 1\nruns_in = \"task_rx_process\"\n",
-        );
+        let no_hz = MINIMAL.replace("cpu_hz = 72000000\n", "");
+        assert!(CostTable::parse(&no_hz).unwrap_err().contains("cpu_hz"));
+        let runs_in = MINIMAL.replace("max = 600\n", "max = 600\nruns_in = \"task_rx_process\"\n");
         assert!(CostTable::parse(&runs_in).unwrap_err().contains("runs_in"));
         assert_eq!(Design::from_name("old"), Some(Design::SinglePriority));
         assert_eq!(Design::from_name("prioritised"), Some(Design::Prioritised));

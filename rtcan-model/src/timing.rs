@@ -35,12 +35,11 @@ pub enum Timestamp {
     Ttcm,
 }
 
-/// What the timing check needs to know about a board's CPU.
+/// What the timing check needs to know about a board's CPU (the clock comes with the
+/// cost table: `[meta] cpu_hz`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BoardCpu {
-    /// Core clock, Hz.
-    pub clock_hz: u32,
-    /// Flash wait states at that clock (documentation of the table's CPI bound).
+    /// Flash wait states at the table's clock (documentation of its CPI bound).
     pub flash_wait_states: u8,
     /// SOF timestamp strategy.
     pub timestamp: Timestamp,
@@ -54,7 +53,6 @@ pub struct BoardCpu {
 pub const fn board_cpu(board: Board) -> BoardCpu {
     match board {
         Board::Stm32f103c8 | Board::Stm32f103rb | Board::Stm32f103re | Board::Qemu => BoardCpu {
-            clock_hz: 72_000_000,
             flash_wait_states: 2,
             timestamp: Timestamp::Ttcm,
             design: Design::Prioritised,
@@ -137,7 +135,7 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
     let bus = &plan.bus;
     let bitrate = bus.bitrate;
     let bit_ns = bits_to_ns(1, bitrate);
-    let hz = f64::from(cpu.clock_hz);
+    let hz = f64::from(t.clock_hz);
     let ns_to_cycles = |ns: u64| ns as f64 * hz / 1e9;
     let cycles_to_ns = |c: f64| (c * 1e9 / hz).ceil() as u64;
     let Some(m) = plan.modules.get(mi) else {
@@ -298,12 +296,13 @@ pub fn diagnose(
             .find(|x| x.name == m.name)
             .and_then(|x| x.span.clone());
         let cpu = board_cpu(m.board);
-        let table_name = table.map_or(cpu.design.name().to_string(), |t| t.design.clone());
-        let cpi = table.map_or_else(|| cpu.design.table().map_or(0.0, |t| t.cpi), |t| t.cpi);
+        let own = cpu.design.table().ok();
+        let (name, cpi, mhz) = table.or(own.as_ref()).map_or((String::new(), 0.0, 0), |t| {
+            (t.design.clone(), t.cpi, t.clock_hz / 1_000_000)
+        });
         let basis = format!(
-            "cost table `{table_name}`, CPI {} at {} MHz; docs/ROBOT_TOML.md \"Timing check\"",
+            "cost table `{name}`, CPI {} at {mhz} MHz; docs/ROBOT_TOML.md \"Timing check\"",
             units::trim_float(cpi),
-            cpu.clock_hz / 1_000_000
         );
         let need = mt.slot_latency_worst_ns + mt.clock_error_ns;
         if need > bus.guard_ns {
@@ -404,14 +403,13 @@ pub fn text(plan: &Plan) -> String {
         );
     }
     if let Some(m) = plan.modules.first() {
-        let cpu = board_cpu(m.board);
-        if let Ok(t) = cpu.design.table() {
+        if let Ok(t) = board_cpu(m.board).design.table() {
             let _ = writeln!(
                 o,
                 "  cost table `{}` (CPI {} at {} MHz): {}",
                 t.design,
                 units::trim_float(t.cpi),
-                cpu.clock_hz / 1_000_000,
+                t.clock_hz / 1_000_000,
                 t.source
             );
         }

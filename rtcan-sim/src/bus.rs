@@ -302,6 +302,7 @@ impl<M: Module> Bus<M> {
                 r.design = cpu.model().design.name().to_string();
                 r.cpi = cpu.model().table.cpi;
                 r.cost = cpu.model().cost.name();
+                r.clock_hz = cpu.model().table.clock_hz;
                 r.modules.push(cpu.summary(&name(i), self.now));
             }
         }

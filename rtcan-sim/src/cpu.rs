@@ -18,9 +18,6 @@ use rtcan_core::driver::{Mailbox, TxResult};
 use rtcan_core::{Frame, Nanos};
 use rtcan_model::costs::{CostTable, Design};
 
-/// Core clock of every modelled board (STM32F103), Hz.
-pub const CLOCK_HZ: u32 = 72_000_000;
-
 /// Resolution of the slot-boundary → TXRQ histogram, ns.
 const HIST_BIN_NS: u64 = 10;
 /// Bins of the histogram (200 µs; longer latencies count in the last bin, max is exact).
@@ -86,7 +83,7 @@ impl CpuModel {
     fn ns(&self, instructions: u32, entries: u32) -> Nanos {
         let cycles = self.table.cycles(instructions)
             + f64::from(entries) * f64::from(self.table.irq_entry_cycles);
-        (cycles * 1e9 / f64::from(CLOCK_HZ)).ceil() as Nanos
+        (cycles * 1e9 / f64::from(self.table.clock_hz.max(1))).ceil() as Nanos
     }
 
     /// Instructions of one activation of `path`.
@@ -266,6 +263,8 @@ pub struct CpuReport {
     pub design: String,
     /// Cycles per instruction used.
     pub cpi: f64,
+    /// Core clock, Hz.
+    pub clock_hz: u32,
     /// `max` or `mean` per activation.
     pub cost: &'static str,
     /// Per module, in bus order.
@@ -282,7 +281,7 @@ impl CpuReport {
             "CPU model: design {}, CPI {}, {} MHz, {} path costs\nmodule        CPU load  slot->TXRQ max / p99 / mean [us]  samples  timer merged\n",
             self.design,
             self.cpi,
-            CLOCK_HZ / 1_000_000,
+            self.clock_hz / 1_000_000,
             self.cost
         );
         for m in &self.modules {
@@ -325,7 +324,7 @@ impl CpuReport {
             ",\"cpu\":{{\"design\":\"{}\",\"cpi\":{},\"clock_hz\":{},\"cost\":\"{}\",\"modules\":[{}]}}",
             self.design,
             self.cpi,
-            CLOCK_HZ,
+            self.clock_hz,
             self.cost,
             mods.join(",")
         )
@@ -629,16 +628,19 @@ mod tests {
 
     /// A prioritised table with round numbers, so the expected times are plain sums.
     const TEST_TABLE: &str = r#"
-design = "prioritised"
-source = "test"
+[meta]
+cpu_hz = 72000000
 cpi = 1.0
-irq_entry_cycles = 12
-systick_period_ns = 1000000
+[priorities]
+isr_slot_timer = 4
+isr_can_rx = 3
+isr_can_tx = 3
+task_protocol = 2
+systick = 1
 [paths.isr_slot_timer]
 max = 100
 mean = 50
 samples = 1
-priority = 4
 [paths.slot_boundary_to_txrq]
 max = 80
 mean = 40
@@ -647,37 +649,30 @@ samples = 1
 max = 150
 mean = 150
 samples = 1
-priority = 3
 [paths.isr_can_tx]
 max = 50
 mean = 50
 samples = 1
-priority = 3
 [paths.task_rx_process]
 max = 600
 mean = 300
 samples = 1
-priority = 2
 [paths.task_sync_slave]
 max = 900
 mean = 900
 samples = 1
-priority = 2
 [paths.task_prepare_slot]
 max = 300
 mean = 100
 samples = 1
-priority = 2
 [paths.task_tx_done]
 max = 200
 mean = 100
 samples = 1
-priority = 2
 [paths.systick]
 max = 60
 mean = 60
 samples = 1
-priority = 1
 "#;
 
     fn test_model(cost: Cost) -> CpuModel {
