@@ -639,7 +639,15 @@ impl<M: Module> Bus<M> {
             }
         }
         if let Some(node) = self.nodes.get_mut(n) {
-            let loaded = node.can.stats.loads > loads;
+            // A TDMA frame (HRT fragment or sync: laxity 0) loaded by this effect is the
+            // TXRQ the slot boundary's latency is about; window frames are not.
+            let loaded = node.can.stats.loads > loads
+                && node
+                    .can
+                    .mailboxes
+                    .iter()
+                    .flatten()
+                    .any(|p| p.loaded_at == now && p.frame.id().laxity() == 0);
             if let Some((cpu, _)) = node.cpu.as_mut() {
                 if loaded {
                     cpu.loaded(now);

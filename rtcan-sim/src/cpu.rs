@@ -99,6 +99,25 @@ impl CpuModel {
         self.table.priority(path)
     }
 
+    /// The longest critical section the protocol task holds on the slot timer's
+    /// resource (`critical_section_slot`; 0 when the table has none).
+    fn critical_section(&self) -> u32 {
+        self.max("critical_section_slot")
+    }
+
+    /// The timer's path to the TXRQ alone: the table's `slot_boundary_to_txrq` max
+    /// includes the worst blocking (the critical section, simulated here as such), its
+    /// mean is the path alone.
+    fn txrq_path(&self) -> u32 {
+        let p = self.table.path("slot_boundary_to_txrq");
+        match self.cost {
+            Cost::Max => p
+                .max
+                .saturating_sub(self.table.path("critical_section_slot").max),
+            Cost::Mean => p.mean,
+        }
+    }
+
     /// The work of `task` runs inside an interrupt handler in this design.
     fn inline(&self, task: &str) -> bool {
         self.table.path(task).runs_in.is_some()
@@ -163,6 +182,18 @@ struct Job {
     started: bool,
     /// Steps still to run: (remaining ns, effect at its end).
     steps: VecDeque<(Nanos, Effect)>,
+    /// Priority of the job's last step (a critical section at the resource's ceiling).
+    ceiling: Option<u8>,
+}
+
+impl Job {
+    /// Priority now: the ceiling while in the last step, if it has one.
+    fn priority(&self) -> u8 {
+        match self.ceiling {
+            Some(c) if self.steps.len() <= 1 => c.max(self.prio),
+            _ => self.prio,
+        }
+    }
 }
 
 /// Figures of one module's CPU over a run.
@@ -170,7 +201,7 @@ struct Job {
 pub struct CpuStats {
     /// Time the CPU executed handlers, ns.
     pub busy_ns: Nanos,
-    /// Slot timer activations whose poll loaded at least one frame.
+    /// Slot timer activations answered by the load of a TDMA frame (HRT or sync).
     pub txrq_samples: u64,
     /// Sum of their timer → TXRQ latencies, ns.
     pub txrq_sum_ns: u64,
@@ -409,7 +440,7 @@ impl Cpu {
             .jobs
             .iter()
             .enumerate()
-            .max_by_key(|(_, j)| (j.prio, j.started, std::cmp::Reverse(j.seq)))
+            .max_by_key(|(_, j)| (j.priority(), j.started, std::cmp::Reverse(j.seq)))
             .map(|(i, _)| i);
         if let Some(i) = best {
             if let Some(j) = self.jobs.get_mut(i) {
@@ -428,6 +459,7 @@ impl Cpu {
             seq: self.seq,
             started: false,
             steps,
+            ceiling: None,
         });
         self.dispatch(now);
     }
@@ -452,7 +484,7 @@ impl Cpu {
         self.open_boundary = Some(now);
         let m = &self.model;
         let handler = m.max("isr_slot_timer");
-        let to_txrq = m.max("slot_boundary_to_txrq").min(handler);
+        let to_txrq = m.txrq_path().min(handler);
         let mut rest = handler - to_txrq;
         if m.inline("task_prepare_slot") {
             rest = rest.saturating_add(m.max("task_prepare_slot"));
@@ -528,8 +560,8 @@ impl Cpu {
         self.push(now, Kind::Tx, prio, steps);
     }
 
-    /// An effect just executed at `now` loaded a mailbox (a TXRQ): if a slot timer
-    /// interrupt is open, this answers it.
+    /// An effect just executed at `now` loaded a TDMA frame (a TXRQ of an HRT fragment
+    /// or the sync): if a slot timer interrupt is open, this answers it.
     pub fn loaded(&mut self, now: Nanos) {
         if let Some(b) = self.open_boundary.take() {
             self.stats.record_txrq(now.saturating_sub(b));
@@ -597,15 +629,21 @@ impl Cpu {
         self.dispatch(now);
         if job.kind == Kind::Timer && !self.model.inline("task_prepare_slot") {
             let m = &self.model;
-            let work = m.ns(m.max("task_prepare_slot"), 0);
-            if work > 0 {
-                let prio = m.prio("task_prepare_slot");
-                self.push(
-                    now,
-                    Kind::Task,
-                    prio,
-                    VecDeque::from([(work, Effect::None)]),
-                );
+            let prepare = m.max("task_prepare_slot");
+            let cs = m.critical_section().min(prepare);
+            let prio = m.prio("task_prepare_slot");
+            let ceiling = m.prio("isr_slot_timer");
+            if prepare > 0 {
+                // The preparation ends by handing the plan to the timer under its lock.
+                let steps = VecDeque::from([
+                    (m.ns(prepare - cs, 0), Effect::None),
+                    (m.ns(cs, 0), Effect::None),
+                ]);
+                self.push(now, Kind::Task, prio, steps);
+                if let Some(job) = self.jobs.iter_mut().max_by_key(|j| j.seq) {
+                    job.ceiling = (cs > 0).then_some(ceiling);
+                }
+                self.dispatch(now);
             }
         }
     }
@@ -673,6 +711,10 @@ samples = 1
 max = 60
 mean = 60
 samples = 1
+[paths.critical_section_slot]
+max = 40
+mean = 20
+samples = 1
 "#;
 
     fn test_model(cost: Cost) -> CpuModel {
@@ -699,27 +741,65 @@ samples = 1
         cpu.rx_read(t, frame, 0, false);
         cpu.retire(t);
         // The timer fires at 1000 while the RX ISR's rest (150 instr) runs: its TXRQ
-        // comes 12 + min(80, 100) cycles after it.
+        // comes 12 + min(80 - 40, 100) cycles after it (the table's 80 include the
+        // 40-instruction critical section, simulated as such).
         cpu.timer(1_000);
         let (t, e) = run_to_effect(&mut cpu);
         assert_eq!(e, Effect::Wake);
-        assert_eq!(t, 1_000 + ns(92.0));
+        assert_eq!(t, 1_000 + ns(52.0));
         cpu.loaded(t);
         cpu.wake_done();
         cpu.retire(t);
-        // Then the rest of the timer (20), the rest of the RX ISR, and the RX task (600)
+        // Then the rest of the timer (60), the rest of the RX ISR, and the RX task (600)
         // before the preparation task spawned after the timer (same priority, later).
         let (t2, e) = run_to_effect(&mut cpu);
         assert!(matches!(e, Effect::Rx { .. }));
-        let isr_end = 167 + ns(150.0) + ns(92.0) + ns(20.0);
+        let isr_end = 167 + ns(150.0) + ns(52.0) + ns(60.0);
         assert_eq!(t2, isr_end + ns(600.0));
         assert_eq!(cpu.stats.txrq_samples, 1);
-        assert_eq!(cpu.stats.txrq_max_ns, ns(92.0));
+        assert_eq!(cpu.stats.txrq_max_ns, ns(52.0));
         // The mean model charges the means: the TXRQ after 12 + min(40, 50) cycles.
         let mut cpu = Cpu::new(test_model(Cost::Mean));
         cpu.timer(0);
         let (t, e) = run_to_effect(&mut cpu);
         assert_eq!((t, e), (ns(52.0), Effect::Wake));
+    }
+
+    #[test]
+    fn a_critical_section_at_the_ceiling_blocks_the_timer() {
+        let mut cpu = Cpu::new(test_model(Cost::Max));
+        cpu.timer(0);
+        let (t, _) = run_to_effect(&mut cpu);
+        cpu.loaded(t);
+        cpu.wake_done();
+        cpu.retire(t);
+        // The timer's rest (100 - 40 = 60 instr), then the preparation: 260 at priority
+        // 2, then 40 at the timer's ceiling.
+        let timer_end = ns(52.0) + ns(60.0);
+        let cs_start = timer_end + ns(260.0);
+        let mut now = t;
+        while now < cs_start {
+            now = cpu.next_event();
+            let _ = cpu.advance(now);
+            cpu.retire(now);
+        }
+        assert_eq!(now, cs_start);
+        // A timer interrupt 10 ns into the critical section waits for its end.
+        cpu.timer(cs_start + 10);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!(e, Effect::Wake);
+        assert_eq!(t, cs_start + ns(40.0) + ns(52.0));
+        cpu.loaded(t);
+        assert_eq!(cpu.stats.txrq_max_ns, ns(40.0) - 10 + ns(52.0));
+        // Outside the critical section the preparation is preempted at once.
+        let mut cpu = Cpu::new(test_model(Cost::Max));
+        cpu.timer(0);
+        let (t, _) = run_to_effect(&mut cpu);
+        cpu.wake_done();
+        cpu.retire(t);
+        cpu.timer(timer_end + 100);
+        let (t, e) = run_to_effect(&mut cpu);
+        assert_eq!((t, e), (timer_end + 100 + ns(52.0), Effect::Wake));
     }
 
     #[test]

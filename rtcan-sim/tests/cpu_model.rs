@@ -58,21 +58,37 @@ fn check(cpis: &[f64], cost: Cost) {
             assert_eq!(new.overlaps_after_warmup, 0, "{new:?}");
             assert!(new.overlaps <= 5, "{new:?}");
             assert_eq!(new.rx_overruns, 0, "{new:?}");
-            // The timer is the top priority: its TXRQ comes after exception entry and
-            // min(slot_boundary_to_txrq, isr_slot_timer) instructions, every time.
+            // The timer is the top priority: its TXRQ comes after exception entry and its
+            // path (min(path to TXRQ, isr_slot_timer)), plus at most what runs at its
+            // priority when it fires: the protocol task's critical section, or the rest of
+            // an earlier timer activation (a compare that fired early, before a sync
+            // correction moved the boundary, re-arms: docs/SIM.md). The 99th percentile
+            // stays within the timing check's worst case (12 + slot_boundary_to_txrq.max
+            // * CPI cycles).
             let t = Design::Prioritised.table().unwrap();
             let fig = |p: &str| match cost {
                 Cost::Max => t.path(p).max,
                 Cost::Mean => t.path(p).mean,
             };
-            let instr = fig("slot_boundary_to_txrq").min(fig("isr_slot_timer"));
-            let path_ns = ((12.0 + f64::from(instr) * cpi) * 1e9 / 72e6_f64).ceil() as u64;
-            assert_eq!(new.txrq_max_ns, path_ns, "{new:?}");
-            assert_eq!(new.txrq_p99_ns, path_ns, "{new:?}");
-            // HRT jitter never exceeds that latency (a window-close wake-up just before a
-            // boundary can load the frame up to one latency early).
-            assert!(new.jitter_ns as u64 <= path_ns, "{new:?}");
-            assert!(new.cpu_load > 0.0 && new.cpu_load < 0.5, "{new:?}");
+            let ns = |instr: u32| ((12.0 + f64::from(instr) * cpi) * 1e9 / 72e6_f64).ceil() as u64;
+            let txrq = t.path("slot_boundary_to_txrq");
+            let cs = fig("critical_section_slot");
+            let path = match cost {
+                Cost::Max => txrq.max - cs,
+                Cost::Mean => txrq.mean,
+            }
+            .min(fig("isr_slot_timer"));
+            let timer_rest = fig("isr_slot_timer") - path;
+            assert!(new.txrq_p99_ns >= ns(path), "{new:?}");
+            assert!(new.txrq_max_ns <= ns(path + cs.max(timer_rest)), "{new:?}");
+            assert!(
+                new.txrq_p99_ns <= ns(txrq.max),
+                "within the check's bound: {new:?}"
+            );
+            // HRT jitter never exceeds the largest latency (a window-close wake-up just
+            // before a boundary can load the frame up to one latency early).
+            assert!(new.jitter_ns as u64 <= new.txrq_max_ns, "{new:?}");
+            assert!(new.cpu_load > 0.0 && new.cpu_load < 1.0, "{new:?}");
             let old = find(&rows, scenario, "single-priority", cpi);
             assert!(old.overlaps_after_warmup > 100, "{old:?}");
             assert!(old.txrq_max_ns > 50_000, "{old:?}");
