@@ -124,6 +124,82 @@ impl CpuModel {
     }
 }
 
+/// A task: run time, priority, and whether the design runs it inside its interrupt.
+#[derive(Clone, Copy, Debug)]
+struct TaskCost {
+    ns: Nanos,
+    prio: u8,
+    inline: bool,
+}
+
+/// The model's costs in ns and priorities, looked up once (the table is keyed by name).
+#[derive(Clone, Debug)]
+struct Costs {
+    timer_prio: u8,
+    /// Timer: entry + path to the TXRQ, then the rest (with an inline preparation).
+    timer_pre: Nanos,
+    timer_rest: Nanos,
+    /// Preparation task after each timer job: (before the critical section, the critical
+    /// section at the timer's ceiling, priority); `None` when inline or empty.
+    prepare: Option<(Nanos, Nanos, u8)>,
+    rx_prio: u8,
+    rx_entry: Nanos,
+    rx_isr: Nanos,
+    rx_task: TaskCost,
+    sync_task: TaskCost,
+    tx_prio: u8,
+    tx_isr: Nanos,
+    tx_task: TaskCost,
+    systick: Nanos,
+    systick_prio: u8,
+    systick_period: Nanos,
+}
+
+impl Costs {
+    fn of(m: &CpuModel) -> Costs {
+        let task = |name: &str| TaskCost {
+            ns: m.ns(m.max(name), 0),
+            prio: m.prio(name),
+            inline: m.inline(name),
+        };
+        let handler = m.max("isr_slot_timer");
+        let to_txrq = m.txrq_path().min(handler);
+        let prepare = m.max("task_prepare_slot");
+        let inline_prepare = m.inline("task_prepare_slot");
+        let mut rest = handler - to_txrq;
+        if inline_prepare {
+            rest = rest.saturating_add(prepare);
+        }
+        let cs = m.critical_section().min(prepare);
+        Costs {
+            timer_prio: m.prio("isr_slot_timer"),
+            timer_pre: m.ns(to_txrq, 1),
+            timer_rest: m.ns(rest, 0),
+            prepare: (!inline_prepare && prepare > 0).then(|| {
+                (
+                    m.ns(prepare - cs, 0),
+                    m.ns(cs, 0),
+                    m.prio("task_prepare_slot"),
+                )
+            }),
+            rx_prio: m.prio("isr_can_rx"),
+            rx_entry: m.ns(0, 1),
+            rx_isr: m.ns(m.max("isr_can_rx"), 0),
+            rx_task: task("task_rx_process"),
+            sync_task: task("task_sync_slave"),
+            tx_prio: m.prio("isr_can_tx"),
+            tx_isr: m.ns(m.max("isr_can_tx"), 1),
+            tx_task: TaskCost {
+                inline: m.inline("task_tx_done") || m.max("task_tx_done") == 0,
+                ..task("task_tx_done")
+            },
+            systick: m.ns(m.max("systick"), 1),
+            systick_prio: m.prio("systick"),
+            systick_period: m.table.systick_period_ns.max(1),
+        }
+    }
+}
+
 /// What a step does when the modelled execution reaches its end.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Effect {
@@ -366,6 +442,7 @@ impl CpuReport {
 #[derive(Clone, Debug)]
 pub struct Cpu {
     model: CpuModel,
+    costs: Costs,
     jobs: Vec<Job>,
     /// Index in `jobs` of the running job and since when its current step runs.
     running: Option<(usize, Nanos)>,
@@ -384,6 +461,7 @@ impl Cpu {
     pub fn new(model: CpuModel) -> Cpu {
         let next_systick = model.table.systick_period_ns;
         Cpu {
+            costs: Costs::of(&model),
             model,
             jobs: Vec::new(),
             running: None,
@@ -482,18 +560,9 @@ impl Cpu {
             return;
         }
         self.open_boundary = Some(now);
-        let m = &self.model;
-        let handler = m.max("isr_slot_timer");
-        let to_txrq = m.txrq_path().min(handler);
-        let mut rest = handler - to_txrq;
-        if m.inline("task_prepare_slot") {
-            rest = rest.saturating_add(m.max("task_prepare_slot"));
-        }
-        let steps = VecDeque::from([
-            (m.ns(to_txrq, 1), Effect::Wake),
-            (m.ns(rest, 0), Effect::None),
-        ]);
-        let prio = m.prio("isr_slot_timer");
+        let c = &self.costs;
+        let steps = VecDeque::from([(c.timer_pre, Effect::Wake), (c.timer_rest, Effect::None)]);
+        let prio = c.timer_prio;
         self.push(now, Kind::Timer, prio, steps);
     }
 
@@ -503,25 +572,21 @@ impl Cpu {
             return;
         }
         // The handler reads the FIFO first; the rest of its path follows the read.
-        let steps = VecDeque::from([(self.model.ns(0, 1), Effect::PopRx { fifo })]);
-        let prio = self.model.prio("isr_can_rx");
+        let steps = VecDeque::from([(self.costs.rx_entry, Effect::PopRx { fifo })]);
+        let prio = self.costs.rx_prio;
         self.push(now, Kind::Rx(fifo), prio, steps);
     }
 
     /// The RX handler read `frame` (step `PopRx` done) at `now`: the rest of the handler,
     /// then the protocol processing, inside the handler or as a task per the design.
     pub fn rx_read(&mut self, now: Nanos, frame: Frame, sof: Nanos, sync: bool) {
-        let m = &self.model;
         let task = if sync {
-            "task_sync_slave"
+            self.costs.sync_task
         } else {
-            "task_rx_process"
+            self.costs.rx_task
         };
-        let isr_rest = m.ns(m.max("isr_can_rx"), 0);
-        let work = m.ns(m.max(task), 0);
+        let (isr_rest, work, inline, prio) = (self.costs.rx_isr, task.ns, task.inline, task.prio);
         let effect = Effect::Rx { frame, sof };
-        let inline = m.inline(task);
-        let prio = m.prio(task);
         self.account(now);
         let Some((j, _)) = self.running else {
             return;
@@ -539,24 +604,22 @@ impl Cpu {
     /// A transmit interrupt for `mailbox` at `now`: the handler, then the completion
     /// reaches the engine inside it or in the protocol task (`task_tx_done`), per design.
     pub fn tx_irq(&mut self, now: Nanos, mailbox: Mailbox, result: TxResult) {
-        let m = &self.model;
+        let c = &self.costs;
         let effect = Effect::TxDone { mailbox, result };
-        let isr = m.max("isr_can_tx");
-        let task = m.max("task_tx_done");
-        let prio = m.prio("isr_can_tx");
-        if task == 0 || m.inline("task_tx_done") {
-            let steps = VecDeque::from([(m.ns(isr.saturating_add(task), 1), effect)]);
+        let prio = c.tx_prio;
+        if c.tx_task.inline {
+            let steps = VecDeque::from([(c.tx_isr + c.tx_task.ns, effect)]);
             self.push(now, Kind::Tx, prio, steps);
             return;
         }
         // The handler queues the completion at its end; the protocol task takes it.
         let spawn = Effect::Spawn {
-            ns: m.ns(task, 0),
-            prio: m.prio("task_tx_done"),
+            ns: c.tx_task.ns,
+            prio: c.tx_task.prio,
             mailbox,
             result,
         };
-        let steps = VecDeque::from([(m.ns(isr, 1), spawn)]);
+        let steps = VecDeque::from([(c.tx_isr, spawn)]);
         self.push(now, Kind::Tx, prio, steps);
     }
 
@@ -578,10 +641,9 @@ impl Cpu {
     pub fn advance(&mut self, now: Nanos) -> Effect {
         self.account(now);
         if now >= self.next_systick {
-            self.next_systick += self.model.table.systick_period_ns.max(1);
-            let m = &self.model;
-            let steps = VecDeque::from([(m.ns(m.max("systick"), 1), Effect::None)]);
-            let prio = m.prio("systick");
+            self.next_systick += self.costs.systick_period;
+            let steps = VecDeque::from([(self.costs.systick, Effect::None)]);
+            let prio = self.costs.systick_prio;
             self.push(now, Kind::SysTick, prio, steps);
         }
         let Some((j, _)) = self.running else {
@@ -627,24 +689,15 @@ impl Cpu {
         let job = self.jobs.swap_remove(j);
         self.running = None;
         self.dispatch(now);
-        if job.kind == Kind::Timer && !self.model.inline("task_prepare_slot") {
-            let m = &self.model;
-            let prepare = m.max("task_prepare_slot");
-            let cs = m.critical_section().min(prepare);
-            let prio = m.prio("task_prepare_slot");
-            let ceiling = m.prio("isr_slot_timer");
-            if prepare > 0 {
-                // The preparation ends by handing the plan to the timer under its lock.
-                let steps = VecDeque::from([
-                    (m.ns(prepare - cs, 0), Effect::None),
-                    (m.ns(cs, 0), Effect::None),
-                ]);
-                self.push(now, Kind::Task, prio, steps);
-                if let Some(job) = self.jobs.iter_mut().max_by_key(|j| j.seq) {
-                    job.ceiling = (cs > 0).then_some(ceiling);
-                }
-                self.dispatch(now);
+        if let (Kind::Timer, Some((before, cs, prio))) = (job.kind, self.costs.prepare) {
+            // The preparation ends by handing the plan to the timer under its lock.
+            let steps = VecDeque::from([(before, Effect::None), (cs, Effect::None)]);
+            self.push(now, Kind::Task, prio, steps);
+            let ceiling = self.costs.timer_prio;
+            if let Some(job) = self.jobs.iter_mut().max_by_key(|j| j.seq) {
+                job.ceiling = (cs > 0).then_some(ceiling);
             }
+            self.dispatch(now);
         }
     }
 }
