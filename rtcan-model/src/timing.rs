@@ -113,14 +113,20 @@ fn topic_min_frame_ns(size: u16, bitrate: u32) -> u64 {
 /// board's own table).
 pub fn analyze(plan: &Plan, table: Option<&CostTable>) -> Result<Timing, String> {
     let mut modules = Vec::new();
+    // Each design's table is parsed once, whatever the number of modules.
+    let mut own: Vec<(Design, CostTable)> = Vec::new();
     for (mi, m) in plan.modules.iter().enumerate() {
         let cpu = board_cpu(m.board);
-        let own;
         let t = match table {
             Some(t) => t,
             None => {
-                own = cpu.design.table()?;
-                &own
+                if !own.iter().any(|(d, _)| *d == cpu.design) {
+                    own.push((cpu.design, cpu.design.table()?));
+                }
+                match own.iter().find(|(d, _)| *d == cpu.design) {
+                    Some((_, t)) => t,
+                    None => continue,
+                }
             }
         };
         modules.push(module_timing(plan, mi, t, cpu));
@@ -157,14 +163,12 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
     if several {
         rx_min = rx_min.min(min_frame_ns(usize::from(HEARTBEAT_DLC), bitrate));
     }
-    for (ti, tp) in plan.topics.iter().enumerate() {
-        let accepted = tp.on_bus
-            && tp.module != mi
-            && match m.filter_mode {
-                FilterMode::Exact => m.rx.contains(&ti),
-                FilterMode::AcceptAll => true,
-            };
-        if accepted {
+    let accepted: Vec<usize> = match m.filter_mode {
+        FilterMode::Exact => m.rx.clone(),
+        FilterMode::AcceptAll => (0..plan.topics.len()).collect(),
+    };
+    for tp in accepted.iter().filter_map(|i| plan.topics.get(*i)) {
+        if tp.on_bus && tp.module != mi {
             rx_min = rx_min.min(topic_min_frame_ns(tp.size, bitrate));
         }
     }
