@@ -27,6 +27,28 @@ use std::fmt::Write as _;
 /// Largest protocol CPU load admitted (the whole CPU: above it, frames are lost).
 pub const MAX_CPU_LOAD: f64 = 1.0;
 
+/// Frames a bxCAN receive FIFO holds (a further one is lost: locked mode).
+pub const RX_FIFO_DEPTH: u64 = 3;
+
+/// Fixpoint of `R = base + Σ ceil(R / T) · C` over `(C, T)` (cycles), from `base`; stops
+/// once past `limit` (the caller's check fails anyway), so the cost stays bounded.
+fn fixpoint(base: f64, higher: &[(f64, f64)], limit: f64) -> f64 {
+    let mut r = base;
+    for _ in 0..1000 {
+        let next = base
+            + higher
+                .iter()
+                .map(|(c, p)| (r / p).ceil().max(1.0) * c)
+                .sum::<f64>();
+        let done = (next - r).abs() < 1e-9;
+        r = next;
+        if done || r > limit {
+            break;
+        }
+    }
+    r
+}
+
 /// How a board timestamps the start of frame of a received sync.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Timestamp {
@@ -67,6 +89,9 @@ pub struct ModuleTiming {
     pub name: String,
     /// Worst-case slot boundary → TXRQ, ns.
     pub slot_latency_worst_ns: u64,
+    /// Worst-case time from a frame entering the RX FIFO to the RX interrupt done with
+    /// it, ns.
+    pub rx_response_worst_ns: u64,
     /// Slot clock error bound against bus time, ns (0 for the master).
     pub clock_error_ns: u64,
     /// Protocol CPU load at 100 % bus load of the densest accepted frames (1.0 = all).
@@ -148,6 +173,7 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
         return ModuleTiming {
             name: String::new(),
             slot_latency_worst_ns: 0,
+            rx_response_worst_ns: 0,
             clock_error_ns: 0,
             cpu_load: 0.0,
             rx_frame_min_ns: 0,
@@ -216,26 +242,41 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
         .map(|(_, c, _)| entry + c)
         .fold(0.0, f64::max);
     let base = entry + t.cycles(t.path("slot_boundary_to_txrq").max) + blocking;
-    let higher: Vec<&(&str, f64, f64)> = handlers
+    let higher: Vec<(f64, f64)> = handlers
         .iter()
         .filter(|(n, _, _)| t.priority(n) > timer_prio)
+        .map(|(_, c, p)| (entry + c, *p))
         .collect();
-    // Fixpoint of R = base + sum(ceil(R / T) * C); stops once past a slot (the check
-    // fails anyway) so the cost stays bounded.
-    let limit = ns_to_cycles(bus.slot_ns);
-    let mut r = base;
-    for _ in 0..1000 {
-        let next = base
-            + higher
-                .iter()
-                .map(|(_, c, p)| (r / p).ceil().max(1.0) * (entry + c))
-                .sum::<f64>();
-        let done = (next - r).abs() < 1e-9;
-        r = next;
-        if done || r > limit {
-            break;
-        }
-    }
+    let r = fixpoint(base, &higher, ns_to_cycles(bus.slot_ns));
+
+    // The RX interrupt: one activation, blocked by one handler of its priority or by the
+    // protocol task's critical section at the timer's ceiling, preempted by every higher
+    // priority (the timer included). The FIFO holds RX_FIFO_DEPTH frames meanwhile.
+    let rx_prio = t.priority("isr_can_rx");
+    let rx_own = entry + t.cycles(t.handler_max("isr_can_rx"));
+    let mut all = handlers.clone();
+    all.push((
+        "isr_slot_timer",
+        t.cycles(t.handler_max("isr_slot_timer")),
+        ns_to_cycles(bus.slot_ns),
+    ));
+    let cs = if timer_prio >= rx_prio {
+        t.cycles(t.path("critical_section_slot").max)
+    } else {
+        0.0
+    };
+    let rx_blocking = all
+        .iter()
+        .filter(|(n, _, _)| *n != "isr_can_rx" && t.priority(n) == rx_prio)
+        .map(|(_, c, _)| entry + c)
+        .fold(cs, f64::max);
+    let rx_higher: Vec<(f64, f64)> = all
+        .iter()
+        .filter(|(n, _, _)| t.priority(n) > rx_prio)
+        .map(|(_, c, p)| (entry + c, *p))
+        .collect();
+    let fifo_cycles = ns_to_cycles(rx_min) * RX_FIFO_DEPTH as f64;
+    let rx_r = fixpoint(rx_own + rx_blocking, &rx_higher, fifo_cycles);
 
     let load_cycles_per_s = {
         let per = |cycles: f64, period_ns: u64| cycles * 1e9 / period_ns.max(1) as f64;
@@ -263,6 +304,7 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
     ModuleTiming {
         name: m.name.clone(),
         slot_latency_worst_ns: cycles_to_ns(r),
+        rx_response_worst_ns: cycles_to_ns(rx_r),
         clock_error_ns,
         cpu_load: load_cycles_per_s / hz,
         rx_frame_min_ns: rx_min,
@@ -348,6 +390,25 @@ pub fn diagnose(
                     "set `guard = \"{}\"` in `[bus]`{slots_hint}",
                     units::fmt_ns(need as f64).replace(' ', "")
                 ))
+                .note(basis.clone()),
+            );
+        }
+        let fifo_ns = mt.rx_frame_min_ns * RX_FIFO_DEPTH;
+        if mt.rx_response_worst_ns > fifo_ns {
+            diags.push(
+                Diagnostic::new(
+                    Code::RxFifoOverrun,
+                    span.clone(),
+                    format!(
+                        "module `{}`: its RX interrupt may take {} to read a frame, longer than its {RX_FIFO_DEPTH}-frame FIFO lasts at 100% bus load of the shortest frames it accepts ({} each)",
+                        m.name,
+                        units::fmt_ns(mt.rx_response_worst_ns as f64),
+                        units::fmt_ns(mt.rx_frame_min_ns as f64)
+                    ),
+                )
+                .help(
+                    "lower the bitrate, or use exact filters (`filters = \"exact\"`) so that only longer frames reach it",
+                )
                 .note(basis.clone()),
             );
         }

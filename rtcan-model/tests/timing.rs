@@ -289,3 +289,43 @@ fn latency_grows_with_the_cpi_and_interference_is_counted_per_arrival() {
     assert_eq!(m.blocking_cycles, 12.0 + rx * 1.25);
     assert_eq!(m.interference_cycles, 0.0);
 }
+
+#[test]
+fn rx_fifo_overrun_when_the_rx_interrupt_outlasts_the_fifo() {
+    // Single-priority design on robot.toml's gateway (shortest accepted frame: 83 us, so
+    // the 3-frame FIFO lasts 249 us). Its RX interrupt (5168 + 2497 inline) is blocked by
+    // the slot timer at the same priority (1725) and preempted once by SysTick (60).
+    let plan = load("robot.toml").plan.unwrap();
+    let old = Design::SinglePriority.table().unwrap();
+    let ns = |cycles: f64| (cycles * 1e9 / 72e6_f64).ceil() as u64;
+    for (cpi, overrun) in [(1.25, false), (2.0, true)] {
+        let t = old.clone().with_cpi(cpi);
+        let gw = &timing::analyze(&plan, Some(&t)).unwrap().modules[0];
+        let r = (12.0 + 7665.0 * cpi) + (12.0 + 1725.0 * cpi) + (12.0 + 60.0 * cpi);
+        assert_eq!(gw.rx_response_worst_ns, ns(r), "CPI {cpi}");
+        assert_eq!(gw.rx_response_worst_ns > 3 * 83_000, overrun, "CPI {cpi}");
+        let a = load("robot.toml");
+        let mut d = Vec::new();
+        let tm = timing::analyze(&plan, Some(&t)).unwrap();
+        timing::diagnose(&a.model.unwrap(), &plan, &tm, Some(&t), &mut d);
+        let gw_codes: Vec<Code> = d
+            .iter()
+            .filter(|d| d.message.starts_with("module `gateway`"))
+            .map(|d| d.code)
+            .collect();
+        let mut want = vec![Code::GuardTooShort];
+        if overrun {
+            want.push(Code::RxFifoOverrun);
+        }
+        want.push(Code::CpuOverload);
+        assert_eq!(gw_codes, want, "CPI {cpi}");
+    }
+    // The prioritised design: the RX interrupt is short and only the timer preempts it.
+    let new = Design::Prioritised.table().unwrap();
+    for cpi in [1.0, 2.0] {
+        let tm = timing::analyze(&plan, Some(&new.clone().with_cpi(cpi))).unwrap();
+        for m in &tm.modules {
+            assert!(m.rx_response_worst_ns < 20_000, "{m:?}");
+        }
+    }
+}
