@@ -23,14 +23,16 @@ pub const PATHS: [&str; 7] = [
     "slot_boundary_to_txrq",
 ];
 
-/// Cycles per instruction bound when `[meta]` gives none (issue 10): F103 flash at 72 MHz
+/// Core clock when the table gives none: the STM32F103 at 72 MHz.
+pub const DEFAULT_CPU_HZ: u32 = 72_000_000;
+/// Cycles per instruction bound when the table gives none (issue 10): F103 flash at 72 MHz
 /// has 2 wait states; the prefetch buffer hides them on straight-line code, taken
 /// branches and literal loads do not.
 pub const DEFAULT_CPI: f64 = 1.25;
-/// Cortex-M3 exception entry (stacking), cycles, when `[meta]` gives none: instruction
+/// Cortex-M3 exception entry (stacking), cycles, when the table gives none: instruction
 /// counts do not see it.
 pub const DEFAULT_IRQ_ENTRY_CYCLES: u32 = 12;
-/// The monotonic's SysTick period when `[meta]` gives none (1 kHz).
+/// The monotonic's SysTick period when the table gives none (1 kHz).
 pub const DEFAULT_SYSTICK_PERIOD_NS: u64 = 1_000_000;
 /// Instructions of the SysTick handler when the table has no `systick` row: an ESTIMATE
 /// (rtic-monotonics' handler: counter update and queue check), not a measurement.
@@ -101,11 +103,11 @@ pub struct PathCost {
 /// A cost table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CostTable {
-    /// Design name (`[meta] design`; empty when not given).
+    /// Design name (`design`; empty when not given).
     pub design: String,
-    /// Where the figures come from (`[meta] source`, else the measured robot).
+    /// Where the figures come from (`source`, else the measured robot).
     pub source: String,
-    /// Core clock the figures are for, Hz (`[meta] cpu_hz`).
+    /// Core clock the figures are for, Hz (`cpu_hz`, default 72 MHz).
     pub clock_hz: u32,
     /// Cycles per instruction bound.
     pub cpi: f64,
@@ -118,57 +120,57 @@ pub struct CostTable {
 }
 
 impl CostTable {
-    /// Parses a table; every path of [`PATHS`] and every priority must be present, every
-    /// value in range. Handler rows take their priority from `[priorities]` (`task_*` rows
-    /// from `task_protocol`) unless the row has its own `priority`.
+    /// Parses a table; every path of [`PATHS`] must be present with a priority, every
+    /// value in range. Table-wide keys (`design`, `source`, `cpu_hz`, `cpi`,
+    /// `irq_entry_cycles`, `systick_period_ns`) sit at the top or in `[meta]`; a handler
+    /// row's priority is its own `priority` key or comes from `[priorities]` (`task_*`
+    /// rows from `task_protocol`).
     pub fn parse(text: &str) -> Result<CostTable, String> {
         let root = syntax::parse(text).map_err(|e| e.first_line())?;
         let Kind::Table(top) = root.kind else {
             return Err("a cost table is a TOML table".into());
         };
-        let Some(Kind::Table(meta)) = find(&top, "meta") else {
-            return Err("cost table: `[meta]` missing".into());
+        let empty = Vec::new();
+        let meta = match find(&top, "meta") {
+            Some(Kind::Table(m)) => m,
+            Some(_) => return Err("cost table: `meta` must be a table".into()),
+            None => &empty,
         };
-        let Some(Kind::Table(prios)) = find(&top, "priorities") else {
-            return Err("cost table: `[priorities]` missing".into());
+        let prios = match find(&top, "priorities") {
+            Some(Kind::Table(p)) => p,
+            Some(_) => return Err("cost table: `priorities` must be a table".into()),
+            None => &empty,
         };
         let Some(Kind::Table(paths)) = find(&top, "paths") else {
             return Err("cost table: `[paths]` missing".into());
         };
-        let opt_str = |k: &str| match find(meta, k) {
+        // A table-wide key, in `[meta]` or at the top.
+        let key = |k: &str| find(meta, k).or_else(|| find(&top, k));
+        let opt_str = |k: &str| match key(k) {
             None => Ok(None),
             Some(Kind::Str(s)) => Ok(Some(s.clone())),
-            Some(_) => Err(format!("cost table: `meta.{k}` must be a string")),
+            Some(_) => Err(format!("cost table: `{k}` must be a string")),
         };
-        let opt_int = |k: &str, lo: i64, hi: i64| match find(meta, k) {
+        let opt_int = |k: &str, lo: i64, hi: i64| match key(k) {
             None => Ok(None),
             Some(Kind::Int(v)) if (lo..=hi).contains(v) => Ok(Some(*v)),
             Some(_) => Err(format!(
-                "cost table: `meta.{k}` must be an integer in {lo}..={hi}"
+                "cost table: `{k}` must be an integer in {lo}..={hi}"
             )),
         };
-        let clock_hz = opt_int("cpu_hz", 1_000_000, 1_000_000_000)?
-            .ok_or("cost table: `meta.cpu_hz` missing")? as u32;
-        let cpi = match find(meta, "cpi") {
+        let clock_hz =
+            opt_int("cpu_hz", 1_000_000, 1_000_000_000)?.map_or(DEFAULT_CPU_HZ, |v| v as u32);
+        let cpi = match key("cpi") {
             None => DEFAULT_CPI,
             Some(Kind::Float(v)) if (0.5..=10.0).contains(v) => *v,
             Some(Kind::Int(v)) if (1..=10).contains(v) => *v as f64,
-            Some(_) => return Err("cost table: `meta.cpi` must be a number in 0.5..=10".into()),
+            Some(_) => return Err("cost table: `cpi` must be a number in 0.5..=10".into()),
         };
         let prio_of = |k: &str| match find(prios, k) {
-            Some(Kind::Int(v)) if (0..=255).contains(v) => Ok(*v as u8),
+            Some(Kind::Int(v)) if (0..=255).contains(v) => Ok(Some(*v as u8)),
             Some(_) => Err(format!("cost table: `priorities.{k}` must be in 0..=255")),
-            None => Err(format!("cost table: `priorities.{k}` missing")),
+            None => Ok(None),
         };
-        for k in [
-            "isr_slot_timer",
-            "isr_can_rx",
-            "isr_can_tx",
-            "task_protocol",
-            "systick",
-        ] {
-            prio_of(k)?;
-        }
         let mut out = Vec::new();
         for e in paths {
             let Kind::Table(p) = &e.value.kind else {
@@ -189,10 +191,15 @@ impl CostTable {
                         e.key
                     ))
                 }
-                None if e.key.starts_with("task_") => Some(prio_of("task_protocol")?),
-                None if e.key.starts_with("isr_") || e.key == "systick" => Some(prio_of(&e.key)?),
+                None if e.key.starts_with("task_") => prio_of("task_protocol")?,
+                None if e.key.starts_with("isr_") || e.key == "systick" => prio_of(&e.key)?,
                 None => None,
             };
+            let handler =
+                e.key.starts_with("isr_") || e.key.starts_with("task_") || e.key == "systick";
+            if handler && priority.is_none() {
+                return Err(format!("cost table: path `{}` needs a priority", e.key));
+            }
             let runs_in = match find(p, "runs_in") {
                 None => None,
                 Some(Kind::Str(h)) => match PATHS.iter().find(|n| *n == h) {
@@ -233,13 +240,15 @@ impl CostTable {
             }
         }
         if !out.iter().any(|(n, _)| n == "systick") {
+            let priority = prio_of("systick")?
+                .ok_or("cost table: no `systick` row and no `priorities.systick`")?;
             out.push((
                 "systick".into(),
                 PathCost {
                     max: SYSTICK_ESTIMATE,
                     mean: SYSTICK_ESTIMATE,
                     samples: 0,
-                    priority: Some(prio_of("systick")?),
+                    priority: Some(priority),
                     runs_in: None,
                 },
             ));
@@ -332,7 +341,7 @@ mod tests {
         assert!(new.priority("isr_can_rx") > new.priority("task_rx_process"));
         assert!(new.priority("task_rx_process") > new.priority("systick"));
         assert_eq!(new.path("slot_boundary_to_txrq").priority, None);
-        assert_eq!(new.path("systick").max, SYSTICK_ESTIMATE, "not measured");
+        assert_eq!(new.path("systick").samples, 0, "SysTick is not measured");
         assert_eq!(new.handler_max("isr_can_rx"), new.path("isr_can_rx").max);
         let old = Design::SinglePriority.table().unwrap();
         assert_eq!(old.design, "single-priority");
@@ -353,7 +362,7 @@ mod tests {
         let no_rx = MINIMAL.replace("[paths.isr_can_rx]", "[paths.isr_can_rx_typo]");
         assert_eq!(
             CostTable::parse(&no_rx).unwrap_err(),
-            "cost table: `priorities.isr_can_rx_typo` missing"
+            "cost table: path `isr_can_rx_typo` needs a priority"
         );
         let no_sync = MINIMAL.replace("[paths.task_sync_slave]", "[paths.task_sync]");
         assert_eq!(
@@ -363,7 +372,23 @@ mod tests {
         let no_prio = MINIMAL.replace("task_protocol = 2\n", "");
         assert_eq!(
             CostTable::parse(&no_prio).unwrap_err(),
-            "cost table: `priorities.task_protocol` missing"
+            "cost table: path `task_rx_process` needs a priority"
+        );
+        // The same kind of table with the table-wide keys at the top and a priority per row.
+        let flat = "design = \"d\"\nsource = \"s\"\ncpi = 2.0\n[paths.isr_slot_timer]\nmax = 1\nmean = 1\nsamples = 1\npriority = 4\n[paths.isr_can_rx]\nmax = 1\nmean = 1\nsamples = 1\npriority = 3\n[paths.isr_can_tx]\nmax = 1\nmean = 1\nsamples = 1\npriority = 3\n[paths.task_rx_process]\nmax = 1\nmean = 1\nsamples = 1\npriority = 2\n[paths.task_sync_slave]\nmax = 1\nmean = 1\nsamples = 1\npriority = 2\n[paths.task_prepare_slot]\nmax = 1\nmean = 1\nsamples = 1\npriority = 2\n[paths.slot_boundary_to_txrq]\nmax = 1\nmean = 1\nsamples = 1\n[paths.systick]\nmax = 5\nmean = 5\nsamples = 0\npriority = 1\n";
+        let t = CostTable::parse(flat).unwrap();
+        assert_eq!(
+            (t.design.as_str(), t.source.as_str(), t.cpi, t.clock_hz),
+            ("d", "s", 2.0, 72_000_000)
+        );
+        assert_eq!(
+            (t.priority("task_sync_slave"), t.path("systick").max),
+            (2, 5)
+        );
+        let no_systick = flat.replace("[paths.systick]", "[paths.other]");
+        assert_eq!(
+            CostTable::parse(&no_systick).unwrap_err(),
+            "cost table: no `systick` row and no `priorities.systick`"
         );
         let neg = MINIMAL.replace("max = 70", "max = -70");
         assert!(CostTable::parse(&neg)
@@ -375,8 +400,8 @@ mod tests {
             .contains("mean above max"));
         let cpi = MINIMAL.replace("cpu_hz = 72000000\n", "cpu_hz = 72000000\ncpi = 0.0\n");
         assert!(CostTable::parse(&cpi).unwrap_err().contains("cpi"));
-        let no_hz = MINIMAL.replace("cpu_hz = 72000000\n", "");
-        assert!(CostTable::parse(&no_hz).unwrap_err().contains("cpu_hz"));
+        let bad_hz = MINIMAL.replace("cpu_hz = 72000000\n", "cpu_hz = 5\n");
+        assert!(CostTable::parse(&bad_hz).unwrap_err().contains("cpu_hz"));
         let runs_in = MINIMAL.replace("max = 600\n", "max = 600\nruns_in = \"task_rx_process\"\n");
         assert!(CostTable::parse(&runs_in).unwrap_err().contains("runs_in"));
         assert_eq!(Design::from_name("old"), Some(Design::SinglePriority));
