@@ -8,6 +8,9 @@ bash scripts/setup.sh --qemu
 echo "== host tests (cargo test --workspace)"
 cargo test --workspace
 
+echo "== simulator on the modelled CPU: issue 10's before/after table (docs/SIM.md)"
+cargo run --release -q -p rtcan-sim --example cpu_before_after
+
 host=$(rustc -vV | sed -n 's/^host: //p')
 echo "== host tests of the firmware workspaces' portable crates"
 (cd boards && cargo test -p rtcan-board-common --target "$host")

@@ -13,6 +13,8 @@ const SYNOPSIS: &str =
     "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N]
                  [--seed S] [--load X] [--ber P] [--json] [--out DIR] [--sweep]
                  [--master-dies-at S]
+                 [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]
+                 [--cpu-cost max|mean]
        rtcan sim --help";
 
 const OPTIONS: &str =
@@ -26,7 +28,11 @@ const OPTIONS: &str =
   --json              the report as JSON on stdout
   --out DIR           write candump log, SVG plots and report.json to DIR
   --sweep             rtcan-paper: add the load sweep 0.5..1.2
-  --master-dies-at S  triskar2: the bus master stops at S seconds (S >= 0)";
+  --master-dies-at S  triskar2: the bus master stops at S seconds (S >= 0)
+  --cpu on|off        run every module's handlers on the modelled CPU (default on)
+  --cpu-design D      prioritised (new, default) or single-priority (old) interrupt design
+  --cpi X             cycles per instruction of the CPU model at 72 MHz (default 1.25)
+  --cpu-cost max|mean every handler at its longest (default) or mean measured path";
 
 /// Parsed command line.
 #[derive(Debug)]
@@ -44,6 +50,9 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     let (mut json, mut sweep, mut seconds_given) = (false, false, false);
     let mut out = None;
     let mut master_dies_at = None;
+    // The CPU model (rtcan_sim::cpu): on by default, prioritised design, CPI 1.25.
+    let (mut cpu_on, mut design, mut cpi) = (true, rtcan_model::costs::Design::Prioritised, 1.25);
+    let mut cost = rtcan_sim::cpu::Cost::Max;
     let mut it = args.iter();
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
@@ -69,6 +78,25 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
             "--load" => cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
             "--ber" => cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
             "--out" => out = Some(PathBuf::from(value("--out")?)),
+            "--cpu" => {
+                cpu_on = match value("--cpu")?.as_str() {
+                    "on" => true,
+                    "off" => false,
+                    v => return Err(format!("--cpu must be `on` or `off`, not `{v}`")),
+                }
+            }
+            "--cpu-design" => {
+                let v = value("--cpu-design")?;
+                design = rtcan_model::costs::Design::from_name(&v).ok_or(format!(
+                    "unknown --cpu-design `{v}` (prioritised or single-priority; new / old)"
+                ))?;
+            }
+            "--cpi" => cpi = value("--cpi")?.parse().map_err(|_| "bad --cpi")?,
+            "--cpu-cost" => {
+                let v = value("--cpu-cost")?;
+                cost = rtcan_sim::cpu::Cost::from_name(&v)
+                    .ok_or(format!("--cpu-cost must be `max` or `mean`, not `{v}`"))?;
+            }
             "--json" => json = true,
             "--sweep" => sweep = true,
             s if s.starts_with('-') && s.len() > 1 => return Err(format!("unknown option `{s}`")),
@@ -103,6 +131,11 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     if sweep && which != Which::Paper {
         return Err("--sweep is supported by the rtcan-paper scenario only".into());
     }
+    cfg.cpu = if cpu_on {
+        Some(rtcan_sim::cpu::CpuModel::new(design, cpi)?.with_cost(cost))
+    } else {
+        None
+    };
     Ok(Some(Args {
         req: Request {
             which,

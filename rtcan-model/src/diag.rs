@@ -96,6 +96,12 @@ codes! {
     BusOverload = "bus-overload", Schedule;
     /// An SRT deadline shorter than the message's own transmission time.
     SrtDeadlineTooShort = "srt-deadline-too-short", Schedule;
+    /// A module's slot-boundary latency plus clock error exceeds the guard (timing.rs).
+    GuardTooShort = "guard-too-short", Schedule;
+    /// A module's protocol CPU load at full bus load exceeds its CPU (timing.rs).
+    CpuOverload = "cpu-overload", Schedule;
+    /// A module's RX interrupt may answer later than its receive FIFO lasts (timing.rs).
+    RxFifoOverrun = "rx-fifo-overrun", Schedule;
 }
 
 /// One error with where it is and what to do about it.

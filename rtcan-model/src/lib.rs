@@ -14,6 +14,7 @@
     )
 )]
 
+pub mod costs;
 pub mod diag;
 pub mod filters;
 pub mod fingerprint;
@@ -23,6 +24,7 @@ pub mod plan;
 pub mod report;
 pub mod schedule;
 pub mod syntax;
+pub mod timing;
 pub mod units;
 pub mod validate;
 
@@ -101,6 +103,9 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
             model = validate::validate(&root, &mut items);
             if let Some(m) = &model {
                 plan = plan::build(m, file, &mut items);
+                if let Some(p) = &plan {
+                    timing::check(m, p, &mut items);
+                }
             }
             if !items.is_empty() {
                 plan = None;

@@ -233,6 +233,7 @@ pub fn text(plan: &Plan) -> String {
     o.push_str(&table(&rows));
     o.push('\n');
     o.push_str(&calendar(plan));
+    o.push_str(&crate::timing::text(plan));
     o
 }
 
@@ -452,6 +453,7 @@ pub fn json(a: &Analysis) -> Value {
         ("master", json!(module_name(plan, b.master))),
         ("fingerprint", json!(format!("{:#010x}", plan.fingerprint))),
         ("reserved_slots", json!(plan.reserved_slots())),
+        ("timing", crate::timing::json(plan)),
         ("hrt", Value::Array(hrt)),
         ("masks", json!(plan.master_masks.iter().map(|m| format!("{m:#018x}")).collect::<Vec<_>>())),
         ("topics", Value::Array(plan.topics.iter().map(|t| topic_json(plan, t)).collect())),

@@ -85,6 +85,11 @@ const CASES: &[(&str, &[Code], Status)] = &[
         Status::NotAdmissible,
     ),
     (
+        "guard-too-short",
+        &[Code::GuardTooShort, Code::GuardTooShort],
+        Status::NotAdmissible,
+    ),
+    (
         "several-errors",
         &[Code::TooManySlots, Code::UnknownType, Code::QueueZero],
         Status::Invalid,

@@ -31,6 +31,7 @@ use rtcan_core::{Frame, Nanos};
 
 use crate::clock::NodeClock;
 use crate::controller::{Filter, SimController, RX_FIFO_DEPTH};
+use crate::cpu::{Cpu, CpuModel, Effect};
 use crate::rng::Rng;
 
 /// Error flag plus error delimiter, in bits.
@@ -76,6 +77,10 @@ pub struct NodeSetup {
     pub nart: bool,
     /// Acceptance filters.
     pub filter: Filter,
+    /// Modelled CPU (`None`: handlers take no time beyond `irq_latency_ns`). With a
+    /// model, interrupts and tasks run on it (`cpu.rs`) and take the time their cost
+    /// table says; set `irq_latency_ns` to 0 then, the model has the exception entry.
+    pub cpu: Option<CpuModel>,
 }
 
 impl Default for NodeSetup {
@@ -85,6 +90,7 @@ impl Default for NodeSetup {
             irq_latency_ns: 0,
             nart: false,
             filter: Filter::AcceptAll,
+            cpu: None,
         }
     }
 }
@@ -121,11 +127,24 @@ pub struct BusStats {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Ev {
-    Wake { node: usize },
+    Wake {
+        node: usize,
+    },
     ArbDecide,
     FrameEnd,
-    RxIrq { node: usize, fifo: usize },
-    TxIrq { node: usize, mb: u8, result: u8 },
+    RxIrq {
+        node: usize,
+        fifo: usize,
+    },
+    TxIrq {
+        node: usize,
+        mb: u8,
+        result: u8,
+    },
+    /// The node's modelled CPU finishes a step or takes SysTick.
+    Cpu {
+        node: usize,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -183,6 +202,8 @@ struct Node<M> {
     irqs: VecDeque<(Key, Ev)>,
     /// Last requested local wake-up and its global time (the inverse clock is costly).
     last_req: Option<(Nanos, Nanos)>,
+    /// The modelled CPU and the key of its next event.
+    cpu: Option<(Cpu, Key)>,
 }
 
 /// The simulated bus with its nodes.
@@ -255,6 +276,7 @@ impl<M: Module> Bus<M> {
     /// Attaches a node; returns its index.
     pub fn add_node(&mut self, module: M, setup: NodeSetup) -> usize {
         let can = SimController::new(setup.nart, setup.filter.clone());
+        let cpu = setup.cpu.clone().map(|m| (Cpu::new(m), NONE));
         self.nodes.push(Node {
             module,
             can,
@@ -262,11 +284,37 @@ impl<M: Module> Bus<M> {
             wake: None,
             irqs: VecDeque::new(),
             last_req: None,
+            cpu,
         });
         // Place 1 + i of node i fits the key's PLACE_BITS for any real bus: module indices
         // are 8-bit.
         self.keys.push(NONE);
-        self.nodes.len() - 1
+        let n = self.nodes.len() - 1;
+        self.cpu_reschedule(n);
+        n
+    }
+
+    /// The CPU report of the run so far (empty without models); `name(i)` names node i.
+    pub fn cpu_report(&self, name: impl Fn(usize) -> String) -> crate::cpu::CpuReport {
+        let mut r = crate::cpu::CpuReport::default();
+        for (i, n) in self.nodes.iter().enumerate() {
+            if let Some((cpu, _)) = &n.cpu {
+                r.design = cpu.model().design.name().to_string();
+                r.cpi = cpu.model().table.cpi;
+                r.cost = cpu.model().cost.name();
+                r.clock_hz = cpu.model().table.clock_hz;
+                r.modules.push(cpu.summary(&name(i), self.now));
+            }
+        }
+        r
+    }
+
+    /// The modelled CPU of node `i` (`None` without a model).
+    pub fn cpu(&self, i: usize) -> Option<&Cpu> {
+        self.nodes
+            .get(i)
+            .and_then(|n| n.cpu.as_ref())
+            .map(|(c, _)| c)
     }
 
     /// Current global time.
@@ -338,8 +386,9 @@ impl<M: Module> Bus<M> {
     fn refresh_key(&mut self, n: usize) {
         if let (Some(node), Some(k)) = (self.nodes.get(n), self.keys.get_mut(1 + n)) {
             let irq = node.irqs.front().map_or(NONE, |&(k, _)| k);
+            let cpu = node.cpu.as_ref().map_or(NONE, |&(_, k)| k);
             // NONE | place = NONE: an empty place stays empty.
-            *k = node.wake.unwrap_or(NONE).min(irq) | (1 + n) as Key;
+            *k = node.wake.unwrap_or(NONE).min(irq).min(cpu) | (1 + n) as Key;
         }
     }
 
@@ -380,6 +429,9 @@ impl<M: Module> Bus<M> {
         let ev = if node.wake == Some(k) {
             node.wake = None;
             Some(Ev::Wake { node: n })
+        } else if let Some((_, ck)) = node.cpu.as_mut().filter(|(_, ck)| *ck == k) {
+            *ck = NONE;
+            Some(Ev::Cpu { node: n })
         } else {
             node.irqs.pop_front().map(|(_, ev)| ev)
         };
@@ -483,6 +535,33 @@ impl<M: Module> Bus<M> {
     }
 
     fn handle(&mut self, ev: Ev) {
+        let now = self.now;
+        // With a modelled CPU, interrupts become jobs on it; their effects come back as
+        // `Ev::Cpu` when the modelled execution reaches them.
+        if let Some(n) = match ev {
+            Ev::Wake { node } | Ev::RxIrq { node, .. } | Ev::TxIrq { node, .. } => Some(node),
+            _ => None,
+        } {
+            if let Some(node) = self.nodes.get_mut(n) {
+                if let Some((cpu, _)) = node.cpu.as_mut() {
+                    match ev {
+                        Ev::Wake { .. } => cpu.timer(now),
+                        Ev::RxIrq { fifo, .. } => {
+                            if let Some(p) = node.can.rx_irq_pending.get_mut(fifo) {
+                                *p = false;
+                            }
+                            cpu.rx_irq(now, fifo);
+                        }
+                        Ev::TxIrq { mb, result, .. } => {
+                            cpu.tx_irq(now, Mailbox(mb), code_result(result));
+                        }
+                        _ => {}
+                    }
+                    self.cpu_reschedule(n);
+                    return;
+                }
+            }
+        }
         match ev {
             // Taken from the node, so whatever the module asks next is a new deadline.
             Ev::Wake { node } => self.callback(node, |m, now, can| m.wake(now, can)),
@@ -494,7 +573,94 @@ impl<M: Module> Bus<M> {
                     m.tx_done(Mailbox(mb), code_result(result), now, can)
                 });
             }
+            Ev::Cpu { node } => self.cpu_step(node),
         }
+    }
+
+    /// Re-keys node `n`'s CPU event after its state changed.
+    fn cpu_reschedule(&mut self, n: usize) {
+        let Some(t) = self
+            .nodes
+            .get(n)
+            .and_then(|node| node.cpu.as_ref())
+            .map(|(c, _)| c.next_event())
+        else {
+            return;
+        };
+        let current = self
+            .nodes
+            .get(n)
+            .and_then(|node| node.cpu.as_ref())
+            .map(|&(_, k)| k);
+        // Keep the place (sequence number) of an unchanged event.
+        if current.is_some_and(|k| k != NONE && key_time(k) == t) {
+            return;
+        }
+        let k = key(t.max(self.now), self.next_seq());
+        if let Some((_, ck)) = self.nodes.get_mut(n).and_then(|node| node.cpu.as_mut()) {
+            *ck = k;
+        }
+        self.refresh_key(n);
+    }
+
+    /// Node `n`'s CPU reached its next event: executes the effect on the module.
+    fn cpu_step(&mut self, n: usize) {
+        let now = self.now;
+        let effect = match self.nodes.get_mut(n).and_then(|node| node.cpu.as_mut()) {
+            Some((cpu, _)) => cpu.advance(now),
+            None => return,
+        };
+        let loads = self.nodes.get(n).map_or(0, |node| node.can.stats.loads);
+        match effect {
+            Effect::None | Effect::Spawn { .. } => {}
+            Effect::Wake => {
+                self.callback(n, |m, now, can| m.wake(now, can));
+            }
+            Effect::PopRx { fifo } => {
+                if let Some(node) = self.nodes.get_mut(n) {
+                    let popped = node.can.fifos.get_mut(fifo).and_then(VecDeque::pop_front);
+                    let more = node.can.fifo_len(fifo) > 0;
+                    if let Some((cpu, _)) = node.cpu.as_mut() {
+                        if let Some((frame, sof)) = popped {
+                            cpu.rx_read(now, frame, sof, frame.id().is_sync());
+                        }
+                        if more {
+                            // The interrupt stays requested while the FIFO holds frames.
+                            cpu.rx_irq(now, fifo);
+                        }
+                    }
+                }
+            }
+            Effect::Rx { frame, sof } => {
+                self.callback(n, |m, now, can| m.rx(&frame, sof, now, can));
+            }
+            Effect::TxDone { mailbox, result } => {
+                self.callback(n, |m, now, can| m.tx_done(mailbox, result, now, can));
+            }
+        }
+        if let Some(node) = self.nodes.get_mut(n) {
+            // A TDMA frame (HRT fragment or sync: laxity 0) loaded by this effect is the
+            // TXRQ the slot boundary's latency is about; window frames are not.
+            let loaded = node.can.stats.loads > loads
+                && node
+                    .can
+                    .mailboxes
+                    .iter()
+                    .flatten()
+                    .any(|p| p.loaded_at == now && p.frame.id().laxity() == 0);
+            if let Some((cpu, _)) = node.cpu.as_mut() {
+                if loaded {
+                    cpu.loaded(now);
+                }
+                if effect == Effect::Wake {
+                    cpu.wake_done();
+                }
+            }
+        }
+        if let Some((cpu, _)) = self.nodes.get_mut(n).and_then(|node| node.cpu.as_mut()) {
+            cpu.retire(now);
+        }
+        self.cpu_reschedule(n);
     }
 
     fn arbitrate(&mut self) {

@@ -16,6 +16,8 @@ pub mod candump;
 pub mod clock;
 pub mod compare;
 pub mod controller;
+pub mod cpu;
+pub mod cpu_compare;
 pub mod decimate;
 pub mod decode;
 pub mod fixed;

@@ -71,6 +71,7 @@ pub fn text(run: &Run) -> String {
         "slot overlaps {}  error frames {}  unattributed frames {}  delivered ok/bad {}/{}",
         run.overlaps, run.bus.error_frames, f.unknown_frames, run.rx_ok, run.rx_bad
     );
+    s.push_str(&run.cpu.text());
     s
 }
 
@@ -178,7 +179,7 @@ pub fn run_json(run: &Run) -> String {
         .collect();
     let l = &f.load;
     format!(
-        "{{\"policy\":{},\"hrt\":[{}],\"srt\":[{}],\"load\":{{\"sync\":{},\"hrt\":{},\"srt\":{},\"nrt\":{},\"errors\":{}}},\"slot_overlaps\":{},\"error_frames\":{},\"unattributed_frames\":{},\"delivered_ok\":{},\"delivered_bad\":{}}}",
+        "{{\"policy\":{},\"hrt\":[{}],\"srt\":[{}],\"load\":{{\"sync\":{},\"hrt\":{},\"srt\":{},\"nrt\":{},\"errors\":{}}},\"slot_overlaps\":{},\"error_frames\":{},\"unattributed_frames\":{},\"delivered_ok\":{},\"delivered_bad\":{}{}}}",
         json_str(run.policy),
         hrt.join(","),
         srt.join(","),
@@ -191,7 +192,8 @@ pub fn run_json(run: &Run) -> String {
         run.bus.error_frames,
         f.unknown_frames,
         run.rx_ok,
-        run.rx_bad
+        run.rx_bad,
+        run.cpu.json_member()
     )
 }
 

@@ -36,6 +36,9 @@ pub struct SimConfig {
     pub record_wire: bool,
     /// Write the wire log as a candump file while running (memory stays bounded).
     pub wire_log: Option<std::path::PathBuf>,
+    /// Modelled CPU of every module (`None`: handlers take no time but
+    /// `irq_latency_ns`; with a model the latency comes from it, `cpu.rs`).
+    pub cpu: Option<crate::cpu::CpuModel>,
 }
 
 impl Default for SimConfig {
@@ -49,11 +52,21 @@ impl Default for SimConfig {
             drift_ppm: 50.0,
             record_wire: true,
             wire_log: None,
+            cpu: None,
         }
     }
 }
 
 impl SimConfig {
+    /// Interrupt latency the bus adds: 0 with a CPU model (it models the entry itself).
+    pub fn node_irq_latency_ns(&self) -> Nanos {
+        if self.cpu.is_some() {
+            0
+        } else {
+            self.irq_latency_ns
+        }
+    }
+
     /// Simulated end time, ns.
     pub fn end_ns(&self) -> Nanos {
         (self.seconds * 1e9) as Nanos
@@ -119,6 +132,8 @@ pub struct Run {
     pub rx_bad: u64,
     /// Simulated span, ns.
     pub sim_ns: Nanos,
+    /// CPU model figures (empty without a model).
+    pub cpu: crate::cpu::CpuReport,
 }
 
 /// Measurement window of a run.
@@ -212,6 +227,7 @@ pub fn run_ideal(sc: &Scenario, cfg: &SimConfig, engine_run: &Run) -> Run {
         rx_ok: 0,
         rx_bad: 0,
         sim_ns: cfg.end_ns(),
+        cpu: engine_run.cpu.clone(),
     }
 }
 
@@ -250,7 +266,8 @@ fn run_bus<'t, M: Module>(
             make(t, host, clock)?,
             NodeSetup {
                 clock,
-                irq_latency_ns: cfg.irq_latency_ns,
+                irq_latency_ns: cfg.node_irq_latency_ns(),
+                cpu: cfg.cpu.clone(),
                 ..NodeSetup::default()
             },
         );
@@ -329,6 +346,7 @@ fn run_bus<'t, M: Module>(
         rx_ok,
         rx_bad,
         sim_ns: end,
+        cpu: bus.cpu_report(|n| format!("node{n}")),
     })
 }
 

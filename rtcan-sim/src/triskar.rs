@@ -275,9 +275,10 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             m,
             NodeSetup {
                 clock,
-                irq_latency_ns: cfg.sim.irq_latency_ns,
+                irq_latency_ns: cfg.sim.node_irq_latency_ns(),
                 nart: false,
                 filter: firmware_filter(filters),
+                cpu: cfg.sim.cpu.clone(),
             },
         );
     }
@@ -377,6 +378,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             rx_ok: 0,
             rx_bad: 0,
             sim_ns: end,
+            cpu: bus.cpu_report(|n| MODULES.get(n).map_or(format!("node{n}"), |s| s.to_string())),
         },
         path,
         min_gap_m: sh.physics.min_gap_m,
