@@ -118,6 +118,64 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
     }
 }
 
+/// Largest robot description read (16 MiB; the Triskar2 robot is 5 KiB): `rtcan check
+/// /dev/zero` stops here instead of reading without limit.
+pub const MAX_SOURCE_BYTES: u64 = 16 * 1024 * 1024;
+
+/// Reads a robot description for diagnostics naming it `file`: at most
+/// [`MAX_SOURCE_BYTES`] (`file-too-large`), UTF-8 (`invalid-utf8` with the byte offset,
+/// line and column of the first bad byte), or `io`.
+pub fn read_source(path: &Path, file: &str) -> Result<String, Diagnostics> {
+    use std::io::Read as _;
+    let fail = |source: String, d: Diagnostic| Diagnostics {
+        file: file.to_string(),
+        source,
+        items: vec![d],
+    };
+    let mut bytes = Vec::new();
+    let read = std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SOURCE_BYTES + 1).read_to_end(&mut bytes));
+    if let Err(e) = read {
+        return Err(fail(
+            String::new(),
+            Diagnostic::new(Code::Io, None, format!("cannot read `{file}`: {e}")),
+        ));
+    }
+    if bytes.len() as u64 > MAX_SOURCE_BYTES {
+        return Err(fail(
+            String::new(),
+            Diagnostic::new(
+                Code::FileTooLarge,
+                None,
+                format!(
+                    "`{file}` is larger than {} MiB",
+                    MAX_SOURCE_BYTES / (1024 * 1024)
+                ),
+            )
+            .help("a robot description is a few KiB; is this the right file?"),
+        ));
+    }
+    match String::from_utf8(bytes) {
+        Ok(s) => Ok(s),
+        Err(e) => {
+            let at = e.utf8_error().valid_up_to();
+            // The text up to the bad byte is valid, so offsets agree with the lossy copy
+            // that is kept for the excerpt.
+            let source = String::from_utf8_lossy(e.as_bytes()).into_owned();
+            let (line, col) = diag::line_col(&source, at);
+            Err(fail(
+                source,
+                Diagnostic::new(
+                    Code::InvalidUtf8,
+                    Some(at..at + 1),
+                    format!("invalid UTF-8 at byte {at} (line {line}, column {col})"),
+                )
+                .help("robot.toml must be UTF-8 text"),
+            ))
+        }
+    }
+}
+
 /// Entry point for users of the model.
 pub struct Robot;
 
@@ -126,18 +184,7 @@ impl Robot {
     pub fn load(path: impl AsRef<Path>) -> Result<Plan, Diagnostics> {
         let path = path.as_ref();
         let file = path.display().to_string();
-        match std::fs::read_to_string(path) {
-            Ok(source) => Robot::parse(&file, &source),
-            Err(e) => Err(Diagnostics {
-                file: file.clone(),
-                source: String::new(),
-                items: vec![Diagnostic::new(
-                    Code::Io,
-                    None,
-                    format!("cannot read `{file}`: {e}"),
-                )],
-            }),
-        }
+        Robot::parse(&file, &read_source(path, &file)?)
     }
 
     /// Plans robot.toml text.

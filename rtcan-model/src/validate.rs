@@ -54,6 +54,41 @@ const KEYWORDS: &[&str] = &[
 
 struct V<'d> {
     diags: &'d mut Vec<Diagnostic>,
+    /// "Did you mean" suggestions computed so far: each costs a scan of the declared
+    /// names, so only the first [`MAX_SUGGESTIONS`] unknown references get one.
+    suggestions: usize,
+}
+
+/// Unknown references that get a "did you mean" (8 000 misspellings against 8 000 names
+/// must not cost 64 M edit distances).
+const MAX_SUGGESTIONS: usize = 50;
+/// Longest word an edit distance is computed for (the distance is quadratic in length).
+const MAX_SUGGEST_LEN: usize = 64;
+/// Names listed when no suggestion is close.
+const MAX_LISTED: usize = 12;
+
+/// Declared names of one kind, in file order, with a hash index (a name lookup per
+/// reference must not scan 64 000 topics).
+struct Names<'a> {
+    list: Vec<&'a str>,
+    index: std::collections::HashMap<&'a str, usize>,
+}
+
+impl<'a> Names<'a> {
+    fn new(entries: &'a [Entry]) -> Self {
+        let list: Vec<&str> = entries.iter().map(|e| e.key.as_str()).collect();
+        let mut index = std::collections::HashMap::with_capacity(list.len());
+        for (i, n) in list.iter().enumerate() {
+            index.entry(*n).or_insert(i);
+        }
+        Names { list, index }
+    }
+    fn find(&self, name: &str) -> Option<usize> {
+        self.index.get(name).copied()
+    }
+    fn get(&self, i: usize) -> &'a str {
+        self.list.get(i).copied().unwrap_or("")
+    }
 }
 
 fn get<'n>(entries: &'n [Entry], key: &str) -> Option<&'n Entry> {
@@ -82,22 +117,33 @@ fn distance(a: &str, b: &str) -> usize {
     row.last().copied().unwrap_or(0)
 }
 
-/// The closest candidate within a small edit distance.
+/// The closest candidate within a small edit distance (`max(2, len / 3)`); candidates
+/// whose length alone puts them further away are skipped without computing a distance.
 pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    if word.len() > MAX_SUGGEST_LEN {
+        return None;
+    }
     candidates
         .into_iter()
+        .filter(|c| c.len().abs_diff(word.len()) <= 2.max(c.len() / 3))
         .map(|c| (distance(word, c), c))
         .filter(|(d, c)| *d <= 2.max(c.len() / 3))
         .min_by_key(|(d, _)| *d)
         .map(|(_, c)| c)
 }
 
+/// `a`, `b`, `c` (the first [`MAX_LISTED`], then "and N more").
 fn list(names: &[&str]) -> String {
-    names
+    let mut out = names
         .iter()
+        .take(MAX_LISTED)
         .map(|n| format!("`{n}`"))
         .collect::<Vec<_>>()
-        .join(", ")
+        .join(", ");
+    if names.len() > MAX_LISTED {
+        out.push_str(&format!(" and {} more", names.len() - MAX_LISTED));
+    }
+    out
 }
 
 impl V<'_> {
@@ -225,9 +271,9 @@ impl V<'_> {
     }
 
     /// Resolves a name reference, or reports `code` with a did-you-mean.
-    fn resolve(&mut self, e: &Entry, what: &str, names: &[&str], code: Code) -> Option<usize> {
+    fn resolve(&mut self, e: &Entry, what: &str, names: &Names<'_>, code: Code) -> Option<usize> {
         let s = self.string(e, what)?;
-        if let Some(i) = names.iter().position(|n| *n == s) {
+        if let Some(i) = names.find(s) {
             return Some(i);
         }
         let kind = match code {
@@ -240,10 +286,16 @@ impl V<'_> {
             e.value.span.clone(),
             format!("unknown {kind} `{s}` in {what}"),
         );
-        d = match suggest(s, names.iter().copied()) {
+        let suggestion = if self.suggestions < MAX_SUGGESTIONS {
+            self.suggestions += 1;
+            suggest(s, names.list.iter().copied())
+        } else {
+            None
+        };
+        d = match suggestion {
             Some(c) => d.help(format!("did you mean `{c}`?")),
-            None if names.is_empty() => d.help(format!("no {kind} is declared")),
-            None => d.help(format!("declared {kind}s: {}", list(names))),
+            None if names.list.is_empty() => d.help(format!("no {kind} is declared")),
+            None => d.help(format!("declared {kind}s: {}", list(&names.list))),
         };
         self.push(d);
         None
@@ -274,7 +326,10 @@ pub fn message_ns(size: usize, bitrate: u32) -> u64 {
 /// (schedule errors found here, like an unrepresentable period, still give a model).
 pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Model> {
     let start = diags.len();
-    let mut v = V { diags };
+    let mut v = V {
+        diags,
+        suggestions: 0,
+    };
     let Kind::Table(root) = &root.kind else {
         return None;
     };
@@ -284,9 +339,9 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
     let module_entries = section(&mut v, root, "modules");
     let node_entries = section(&mut v, root, "nodes");
     let topic_entries = section(&mut v, root, "topics");
-    let type_names: Vec<&str> = type_entries.iter().map(|e| e.key.as_str()).collect();
-    let module_names: Vec<&str> = module_entries.iter().map(|e| e.key.as_str()).collect();
-    let node_names: Vec<&str> = node_entries.iter().map(|e| e.key.as_str()).collect();
+    let type_names = Names::new(type_entries);
+    let module_names = Names::new(module_entries);
+    let node_names = Names::new(node_entries);
 
     let types: Vec<MsgType> = type_entries.iter().map(|e| msg_type(&mut v, e)).collect();
     let modules: Vec<Module> = module_entries.iter().map(|e| module(&mut v, e)).collect();
@@ -455,7 +510,7 @@ fn board_list() -> String {
     list(&names)
 }
 
-fn node(v: &mut V<'_>, e: &Entry, modules: &[&str]) -> Node {
+fn node(v: &mut V<'_>, e: &Entry, modules: &Names<'_>) -> Node {
     v.name(e, "node", false);
     let mut n = Node {
         name: e.key.clone(),
@@ -487,7 +542,7 @@ fn node(v: &mut V<'_>, e: &Entry, modules: &[&str]) -> Node {
     n
 }
 
-fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
+fn bus(v: &mut V<'_>, root: &[Entry], modules: &Names<'_>) -> Option<Bus> {
     let Some(be) = get(root, "bus") else {
         v.push(
             Diagnostic::new(
@@ -696,7 +751,7 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
                                 item.span.clone(),
                                 format!(
                                     "module `{}` is already a master or backup master",
-                                    modules.get(i).unwrap_or(&"")
+                                    modules.get(i)
                                 ),
                             ));
                         } else {
@@ -734,8 +789,8 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
 fn topic(
     v: &mut V<'_>,
     e: &Entry,
-    type_names: &[&str],
-    node_names: &[&str],
+    type_names: &Names<'_>,
+    node_names: &Names<'_>,
     types: &[MsgType],
     bus: Option<&Bus>,
 ) -> Option<Topic> {
@@ -935,7 +990,7 @@ fn subscribers(
     v: &mut V<'_>,
     e: &Entry,
     t: &[Entry],
-    node_names: &[&str],
+    node_names: &Names<'_>,
     default_queue: u16,
 ) -> Option<Vec<Subscriber>> {
     let Some(s) = get(t, "subscribers") else {
@@ -956,6 +1011,7 @@ fn subscribers(
         return None;
     };
     let mut out: Vec<Subscriber> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     let mut ok = true;
     for item in items {
         let (node_entry, queue) = match &item.kind {
@@ -1015,13 +1071,13 @@ fn subscribers(
             ok = false;
             continue;
         };
-        if out.iter().any(|s| s.node == node) {
+        if !seen.insert(node) {
             v.push(Diagnostic::new(
                 Code::DuplicateName,
                 node_entry.value.span.clone(),
                 format!(
                     "node `{}` subscribes to topic `{}` twice",
-                    node_names.get(node).unwrap_or(&""),
+                    node_names.get(node),
                     e.key
                 ),
             ));
