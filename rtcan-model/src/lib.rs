@@ -93,6 +93,12 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
                     line.trim().replace("`\"", "`").replace("\"`", "`"),
                 )
                 .help("every type, module, node and topic name must be unique"),
+                None if too_deep(&e.message, e.span.as_ref(), source) => Diagnostic::new(
+                    Code::TooDeep,
+                    e.span.clone(),
+                    format!("tables or arrays nested deeper than the TOML parser accepts ({})", e.first_line()),
+                )
+                .help("robot.toml needs at most 4 levels (e.g. `[topics.x]` with `subscribers = [{ node = \"n\" }]`)"),
                 None => Diagnostic::new(Code::TomlSyntax, e.span.clone(), e.first_line()),
             };
             items.push(d);
@@ -175,6 +181,25 @@ pub fn read_source(path: &Path, file: &str) -> Result<String, Diagnostics> {
         }
     }
 }
+
+/// Whether a TOML error comes from nesting: toml_edit says "recursion limit exceeded"
+/// for deep arrays and inline tables, but only "invalid table header" for a header with
+/// too many dotted keys (more than [`MAX_HEADER_KEYS`] on the error's line).
+fn too_deep(message: &str, span: Option<&Span>, source: &str) -> bool {
+    if message.contains("recursion limit") {
+        return true;
+    }
+    if !message.contains("invalid table header") {
+        return false;
+    }
+    let at = span.map_or(0, |s| s.start).min(source.len());
+    let start = source.get(..at).and_then(|s| s.rfind('\n')).map_or(0, |i| i + 1);
+    let line = source.get(start..).and_then(|s| s.lines().next()).unwrap_or("");
+    line.matches('.').count() + 1 > MAX_HEADER_KEYS
+}
+
+/// Dotted keys in one table header beyond which a header error is reported as nesting.
+const MAX_HEADER_KEYS: usize = 64;
 
 /// Entry point for users of the model.
 pub struct Robot;

@@ -181,7 +181,13 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
                     )
                 })
                 .collect();
-            uses.truncate(8);
+            // Eight are enough to see the pattern; the count says the list is cut.
+            let listed = 8;
+            let more = uses.len().saturating_sub(listed);
+            uses.truncate(listed);
+            if more > 0 {
+                uses.push(format!("and {more} more"));
+            }
             Diagnostic::new(
                 Code::HrtOverCapacity,
                 span_of(culprit),

@@ -397,18 +397,26 @@ fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
         let Some(text) = v.string(f, &format!("field `{}.{}`", e.key, f.key)) else {
             continue;
         };
-        match field_type(text) {
-            Some(ty) => {
+        match parse_field_type(text) {
+            Ok(ty) => {
                 fields.push(Field { name: f.key.clone(), ty, offset });
                 offset += ty.size();
             }
-            None => v.push(
+            Err(FieldTypeError::Unknown) => v.push(
                 Diagnostic::new(
                     Code::UnknownType,
                     f.value.span.clone(),
                     format!("unknown field type `{text}` for `{}.{}`", e.key, f.key),
                 )
-                .help("field types are u8, u16, u32, u64, i8, i16, i32, i64, f32, f64, bool, or an array `[T; N]` of one"),
+                .help(format!("field types are u8, u16, u32, u64, i8, i16, i32, i64, f32, f64, bool, or an array `[T; N]` of one with N in 1..={MAX_PAYLOAD}")),
+            ),
+            Err(FieldTypeError::Length(n)) => v.push(
+                Diagnostic::new(
+                    Code::BadValue,
+                    f.value.span.clone(),
+                    format!("array length {n} of field `{}.{}` is out of range 1..={MAX_PAYLOAD}", e.key, f.key),
+                )
+                .help(format!("a message carries at most {MAX_PAYLOAD} bytes; an array has 1 to {MAX_PAYLOAD} elements")),
             ),
         }
     }
@@ -435,16 +443,38 @@ fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
 
 /// `f32` or `[i16; 3]` (1 <= N <= MAX_PAYLOAD).
 pub fn field_type(text: &str) -> Option<FieldType> {
+    parse_field_type(text).ok()
+}
+
+/// Why a field type does not parse.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FieldTypeError {
+    /// Not a primitive or `[primitive; N]`.
+    Unknown,
+    /// `[T; N]` with N, as written, outside 1..=MAX_PAYLOAD.
+    Length(String),
+}
+
+/// [`field_type`], telling an unknown type from an array length out of range.
+pub fn parse_field_type(text: &str) -> Result<FieldType, FieldTypeError> {
     let t = text.trim();
     if let Some(inner) = t.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
-        let (p, n) = inner.split_once(';')?;
-        let prim = Prim::from_name(p.trim())?;
-        let n: u16 = n.trim().parse().ok()?;
-        (1..=MAX_PAYLOAD as u16)
-            .contains(&n)
-            .then_some(FieldType { prim, len: Some(n) })
+        let (p, n) = inner.split_once(';').ok_or(FieldTypeError::Unknown)?;
+        let prim = Prim::from_name(p.trim()).ok_or(FieldTypeError::Unknown)?;
+        let written = n.trim();
+        // Any integer literal is a length (out of range or not); anything else is not a type.
+        let digits = written.strip_prefix('-').unwrap_or(written);
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit() || b == b'_') {
+            return Err(FieldTypeError::Unknown);
+        }
+        match written.replace('_', "").parse::<u16>() {
+            Ok(n) if (1..=MAX_PAYLOAD as u16).contains(&n) => Ok(FieldType { prim, len: Some(n) }),
+            _ => Err(FieldTypeError::Length(written.to_string())),
+        }
     } else {
-        Prim::from_name(t).map(|prim| FieldType { prim, len: None })
+        Prim::from_name(t)
+            .map(|prim| FieldType { prim, len: None })
+            .ok_or(FieldTypeError::Unknown)
     }
 }
 
@@ -564,20 +594,25 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &Names<'_>) -> Option<Bus> {
 
     let mut bitrate = 1_000_000u64;
     if let Some(e) = get(t, "bitrate") {
+        // The value as written goes into the message (`-1000000`, not a clamped 0).
         let parsed = match &e.value.kind {
-            Kind::Int(i) => Some(u64::try_from(*i).unwrap_or(0)),
-            _ => v.parsed(e, "`bitrate`", units::bitrate),
+            Kind::Int(i) => Some((i128::from(*i), i.to_string())),
+            Kind::Str(text) => v
+                .parsed(e, "`bitrate`", units::bitrate)
+                .map(|b| (i128::from(b), format!("\"{text}\" ({b} bit/s)"))),
+            _ => v.parsed(e, "`bitrate`", units::bitrate).map(|b| (i128::from(b), b.to_string())),
         };
         match parsed {
-            Some(b) if (10_000..=1_000_000).contains(&b) => bitrate = b,
-            Some(b) => {
+            Some((b, _)) if (10_000..=1_000_000).contains(&b) => bitrate = b as u64,
+            Some((b, written)) => {
+                let why = if b < 0 { "negative" } else { "out of range" };
                 v.push(
                     Diagnostic::new(
                         Code::BadValue,
                         e.value.span.clone(),
-                        format!("bit rate {b} bit/s is out of range"),
+                        format!("bit rate {written} is {why}"),
                     )
-                    .help("classic CAN runs at 10 kbit/s to 1 Mbit/s"),
+                    .help("classic CAN runs at 10 kbit/s to 1 Mbit/s: write e.g. \"500kbit/s\" or 1000000"),
                 );
                 ok = false;
             }
