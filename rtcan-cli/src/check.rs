@@ -1,7 +1,7 @@
 //! `rtcan check robot.toml [--json]`: the same analysis as the build (rtcan-model), printed
 //! for a person (plan, load, filters, calendar) or as JSON (docs/ROBOT_TOML.md).
-use rtcan_model::{analyze, read_source, report, Analysis, Status};
 use crate::out;
+use rtcan_model::{analyze, read_source, report, Analysis, Status};
 use std::path::Path;
 
 /// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage.

@@ -16,6 +16,7 @@
 )]
 
 pub mod admission;
+pub mod bit_timing;
 pub mod calendar;
 pub mod clock;
 pub mod counters;

@@ -60,6 +60,13 @@ codes! {
     BadName = "bad-name", Input;
     /// Two items with the same (normalised) name.
     DuplicateName = "duplicate-name", Input;
+    /// Names that collide in the generated code (`enc1` and `enc_1` → `Enc1Topic`), or
+    /// a module named like a generated item or a primitive type.
+    NameCollision = "name-collision", Input;
+    /// The bit rate is not reachable exactly from the CAN clock of a module's board.
+    BitrateUnreachable = "bitrate-unreachable", Input;
+    /// A topic's message pool exceeds what `rtcan_pubsub::Topic` supports.
+    PoolTooLarge = "pool-too-large", Input;
     /// A message type, or a field type, that does not exist.
     UnknownType = "unknown-type", Input;
     /// A node reference that does not exist.
@@ -189,7 +196,9 @@ impl LineIndex {
 
     /// 0-based line holding byte `offset`.
     fn line_of(&self, offset: usize) -> usize {
-        self.starts.partition_point(|&s| s <= offset).saturating_sub(1)
+        self.starts
+            .partition_point(|&s| s <= offset)
+            .saturating_sub(1)
     }
 
     /// Byte offset of the start of the line holding `offset`.

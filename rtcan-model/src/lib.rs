@@ -19,6 +19,7 @@ pub mod filters;
 pub mod fingerprint;
 pub mod ids;
 pub mod model;
+pub mod names;
 pub mod plan;
 pub mod report;
 pub mod schedule;
@@ -193,8 +194,14 @@ fn too_deep(message: &str, span: Option<&Span>, source: &str) -> bool {
         return false;
     }
     let at = span.map_or(0, |s| s.start).min(source.len());
-    let start = source.get(..at).and_then(|s| s.rfind('\n')).map_or(0, |i| i + 1);
-    let line = source.get(start..).and_then(|s| s.lines().next()).unwrap_or("");
+    let start = source
+        .get(..at)
+        .and_then(|s| s.rfind('\n'))
+        .map_or(0, |i| i + 1);
+    let line = source
+        .get(start..)
+        .and_then(|s| s.lines().next())
+        .unwrap_or("");
     line.matches('.').count() + 1 > MAX_HEADER_KEYS
 }
 

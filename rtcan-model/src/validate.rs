@@ -5,8 +5,10 @@ use crate::model::{
     Board, Bus, BusSpans, Field, FieldType, FilterMode, Model, Module, MsgType, Node, Prim,
     Subscriber, Topic, TopicSpans,
 };
+use crate::names;
 use crate::syntax::{self, Entry, Kind};
 use crate::units;
+use rtcan_core::bit_timing::{BitTiming, BitTimingError};
 use rtcan_core::fragment::{fragment_count, wire_len, MAX_PAYLOAD};
 use rtcan_core::laxity::LaxityEncoding;
 use rtcan_core::timing::{bits_to_ns, worst_case_bits};
@@ -44,13 +46,6 @@ const SUB_KEYS: &[&str] = &["node", "queue"];
 pub const MAX_MODULES: usize = 64;
 /// Highest node priority (Cortex-M3 NVIC as used by RTIC on the F103: 4 bits).
 pub const MAX_PRIORITY: i64 = 15;
-/// Rust keywords that cannot be field, module, node or topic names.
-const KEYWORDS: &[&str] = &[
-    "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum", "extern",
-    "false", "fn", "for", "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub",
-    "ref", "return", "self", "static", "struct", "super", "trait", "true", "type", "unsafe", "use",
-    "where", "while", "yield", "box", "try",
-];
 
 struct V<'d> {
     diags: &'d mut Vec<Diagnostic>,
@@ -133,6 +128,14 @@ pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) ->
 }
 
 /// `a`, `b`, `c` (the first [`MAX_LISTED`], then "and N more").
+/// A name for a message: the first 64 characters of a long one.
+fn clip_name(name: &str) -> String {
+    match name.char_indices().nth(64) {
+        Some((i, _)) => format!("{}... ({} bytes)", name.get(..i).unwrap_or(""), name.len()),
+        None => name.to_string(),
+    }
+}
+
 fn list(names: &[&str]) -> String {
     let mut out = names
         .iter()
@@ -242,32 +245,54 @@ impl V<'_> {
     fn name(&mut self, e: &Entry, what: &str, camel: bool) -> bool {
         let n = &e.key;
         let mut chars = n.chars();
-        let ok = if camel {
+        let form_ok = if camel {
             chars.next().is_some_and(|c| c.is_ascii_uppercase())
                 && chars.all(|c| c.is_ascii_alphanumeric())
         } else {
             chars.next().is_some_and(|c| c.is_ascii_lowercase())
                 && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
-                && !KEYWORDS.contains(&n.as_str())
         };
-        if !ok {
-            let form = if camel {
-                "CamelCase, e.g. `WheelSpeeds`"
+        let form = if camel {
+            "CamelCase, e.g. `WheelSpeeds`"
+        } else {
+            "snake_case, e.g. `wheel_speeds`"
+        };
+        if !form_ok {
+            self.push(
+                Diagnostic::new(
+                    Code::BadName,
+                    e.key_span.clone(),
+                    format!("{what} name `{}` is not a valid name", clip_name(n)),
+                )
+                .help(format!(
+                    "{what} names are {form}, not a Rust keyword; they become Rust identifiers"
+                )),
+            );
+            return false;
+        }
+        if names::is_keyword(n) {
+            let raw = if names::NOT_RAW.contains(&n.as_str()) {
+                "it cannot be an identifier at all, not even `r#"
             } else {
-                "snake_case, not a Rust keyword"
+                "it would need the raw identifier `r#"
+            };
+            let end = if names::NOT_RAW.contains(&n.as_str()) {
+                "`"
+            } else {
+                "` at every use"
             };
             self.push(
                 Diagnostic::new(
                     Code::BadName,
                     e.key_span.clone(),
-                    format!("{what} name `{n}` is not a valid name"),
+                    format!("{what} name `{n}` is a Rust keyword"),
                 )
-                .help(format!(
-                    "{what} names are {form}; they become Rust identifiers"
-                )),
+                .help(format!("{what} names become Rust identifiers; {raw}{n}{end}: rename it, e.g. `{}`", if camel { format!("{n}Msg") } else { format!("{n}_") }))
+                .note("every strict, reserved and weak keyword of editions 2015 to 2024 is refused (docs/ROBOT_TOML.md, \"Names\")"),
             );
+            return false;
         }
-        ok
+        true
     }
 
     /// Resolves a name reference, or reports `code` with a did-you-mean.
@@ -371,6 +396,10 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
             topics.push(t);
         }
     }
+    generated_name_clashes(&mut v, module_entries, topic_entries);
+    if let Some(b) = &bus {
+        bit_timing(&mut v, b, &modules);
+    }
     let bus = bus?;
     let failed = diags.get(start..).is_some_and(|new| {
         new.iter()
@@ -386,6 +415,105 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
         nodes,
         topics,
     })
+}
+
+/// The bit rate must be reachable exactly from every board's CAN clock, by the same
+/// computation the firmware's `can_btr!` runs at compile time (rtcan_core::bit_timing).
+fn bit_timing(v: &mut V<'_>, bus: &Bus, modules: &[Module]) {
+    for board in Board::ALL {
+        let Some(clock) = board.can_clock_hz() else {
+            continue;
+        };
+        let users: Vec<&str> = modules
+            .iter()
+            .filter(|m| m.board == board)
+            .map(|m| m.name.as_str())
+            .collect();
+        if users.is_empty() {
+            continue;
+        }
+        let why = match BitTiming::compute(clock, bus.bitrate) {
+            Ok(_) => continue,
+            Err(BitTimingError::OutOfRange) => "above an eighth of the clock".to_string(),
+            Err(BitTimingError::NoExactPrescaler) => format!(
+                "no prescaler 1..=1024 divides {} MHz into 8..=25 time quanta per bit",
+                units::trim_float(f64::from(clock) / 1e6)
+            ),
+        };
+        let near: Vec<String> = COMMON_BITRATES
+            .iter()
+            .filter(|r| BitTiming::compute(clock, **r).is_ok())
+            .map(|r| units::trim_float(f64::from(*r) / 1e3) + " kbit/s")
+            .collect();
+        v.push(
+            Diagnostic::new(
+                Code::BitrateUnreachable,
+                bus.spans
+                    .bitrate
+                    .clone()
+                    .or_else(|| bus.spans.table.clone()),
+                format!(
+                    "bit rate {} bit/s is not reachable on board {} (CAN clock {} MHz): {why}",
+                    bus.bitrate,
+                    board.name(),
+                    units::trim_float(f64::from(clock) / 1e6)
+                ),
+            )
+            .help(format!(
+                "bit rates this board reaches exactly: {}",
+                near.join(", ")
+            ))
+            .note(format!("modules on this board: {}", list(&users))),
+        );
+    }
+}
+
+/// Bit rates offered in the hint of `bitrate-unreachable`.
+const COMMON_BITRATES: &[u32] = &[
+    1_000_000, 800_000, 500_000, 250_000, 125_000, 100_000, 50_000, 20_000, 10_000,
+];
+
+/// Names that are valid alone but collide in the generated code: a module named like a
+/// generated item or a primitive type, and topics whose `<Camel>Topic` aliases are equal.
+fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
+    for m in modules {
+        if names::RESERVED_MODULE_NAMES.contains(&m.key.as_str()) {
+            let what = if m.key == "topics" {
+                "the generated module holding the topic constants"
+            } else {
+                "a primitive type the generated message structs use"
+            };
+            v.push(
+                Diagnostic::new(
+                    Code::NameCollision,
+                    m.key_span.clone(),
+                    format!("module name `{}` collides with {what}", m.key),
+                )
+                .help(format!("rename the module, e.g. `{}_module`", m.key)),
+            );
+        }
+    }
+    let mut aliases: std::collections::HashMap<String, &str> =
+        std::collections::HashMap::with_capacity(topics.len());
+    for t in topics {
+        let alias = names::topic_alias(&t.key);
+        match aliases.get(&alias) {
+            Some(first) => v.push(
+                Diagnostic::new(
+                    Code::NameCollision,
+                    t.key_span.clone(),
+                    format!(
+                        "topics `{first}` and `{}` both become the Rust type `{alias}`",
+                        clip_name(&t.key)
+                    ),
+                )
+                .help("names that differ only in underscores collide after conversion to CamelCase: rename one"),
+            ),
+            None => {
+                aliases.insert(alias, &t.key);
+            }
+        }
+    }
 }
 
 fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
@@ -594,13 +722,16 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &Names<'_>) -> Option<Bus> {
 
     let mut bitrate = 1_000_000u64;
     if let Some(e) = get(t, "bitrate") {
+        spans.bitrate = e.value.span.clone();
         // The value as written goes into the message (`-1000000`, not a clamped 0).
         let parsed = match &e.value.kind {
             Kind::Int(i) => Some((i128::from(*i), i.to_string())),
             Kind::Str(text) => v
                 .parsed(e, "`bitrate`", units::bitrate)
                 .map(|b| (i128::from(b), format!("\"{text}\" ({b} bit/s)"))),
-            _ => v.parsed(e, "`bitrate`", units::bitrate).map(|b| (i128::from(b), b.to_string())),
+            _ => v
+                .parsed(e, "`bitrate`", units::bitrate)
+                .map(|b| (i128::from(b), b.to_string())),
         };
         match parsed {
             Some((b, _)) if (10_000..=1_000_000).contains(&b) => bitrate = b as u64,

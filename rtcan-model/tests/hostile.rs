@@ -137,7 +137,10 @@ fn sixty_four_kib_names_do_not_panic() {
         "{HEADER}[modules.{long}]\nboard = \"qemu\"\n[nodes.n]\nmodule = \"{long}\"\n[topics.{long}]\ntype = \"T\"\npublisher = \"n\"\nclass = \"hrt\"\nperiod_slots = 10\nsubscribers = [\"n\"]\n"
     );
     let a = analyze("robot.toml", &src);
-    let plan = a.plan.as_ref().unwrap_or_else(|| panic!("{}", a.diagnostics.render()));
+    let plan = a
+        .plan
+        .as_ref()
+        .unwrap_or_else(|| panic!("{}", a.diagnostics.render()));
     let text = report::text(plan);
     assert!(text.contains(&long));
     let _ = report::json_text(&a);
@@ -152,7 +155,9 @@ fn negative_bit_rate_is_reported_as_written() {
         "{text}"
     );
     let src = HEADER.replace("[bus]\n", "[bus]\nbitrate = 99999999999\n");
-    assert!(first_message(&src).starts_with("error[bad-value]: bit rate 99999999999 is out of range\n"));
+    assert!(
+        first_message(&src).starts_with("error[bad-value]: bit rate 99999999999 is out of range\n")
+    );
     let src = HEADER.replace("[bus]\n", "[bus]\nbitrate = \"5Mbit/s\"\n");
     assert!(first_message(&src)
         .starts_with("error[bad-value]: bit rate \"5Mbit/s\" (5000000 bit/s) is out of range\n"));
@@ -160,7 +165,12 @@ fn negative_bit_rate_is_reported_as_written() {
 
 #[test]
 fn array_lengths_out_of_range_name_the_range() {
-    for (len, shown) in [("0", "0"), ("1023", "1023"), ("99999999999", "99999999999"), ("-1", "-1")] {
+    for (len, shown) in [
+        ("0", "0"),
+        ("1023", "1023"),
+        ("99999999999", "99999999999"),
+        ("-1", "-1"),
+    ] {
         let src = HEADER.replace("v = \"u8\"", &format!("v = \"[u8; {len}]\""));
         let text = first_message(&src);
         assert!(
@@ -206,5 +216,9 @@ fn over_capacity_note_counts_what_it_cuts() {
     let d = &a.diagnostics.items[0];
     assert_eq!(d.code, Code::HrtOverCapacity);
     assert_eq!(d.notes.len(), 1);
-    assert!(d.notes[0].ends_with("`t15` 1/20, and 22 more"), "{}", d.notes[0]);
+    assert!(
+        d.notes[0].ends_with("`t15` 1/20, and 22 more"),
+        "{}",
+        d.notes[0]
+    );
 }
