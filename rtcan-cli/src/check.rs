@@ -4,7 +4,7 @@ use crate::out;
 use rtcan_model::{analyze, read_source, report, Analysis, Status};
 use std::path::Path;
 
-/// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage.
+/// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage, 3 undecided.
 pub fn run(args: &[String]) -> i32 {
     let mut json = false;
     let mut path: Option<&str> = None;
@@ -49,6 +49,8 @@ pub fn run(args: &[String]) -> i32 {
         out::print(&report::text(plan));
     } else if status == Status::NotAdmissible {
         out::println(&format!("{path}: not admissible"));
+    } else if status == Status::Undecided {
+        out::println(&format!("{path}: undecided (admission search budget exhausted)"));
     }
     status.exit_code()
 }

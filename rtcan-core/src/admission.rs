@@ -107,11 +107,21 @@ pub enum AdmissionError {
         conflict: [u16; MAX_CONFLICT],
         /// Number of valid entries in `conflict`.
         len: u8,
+        /// Requests in the core found (`> len` when `conflict` is truncated, e.g. a
+        /// capacity argument over many requests).
+        size: u16,
     },
-    /// The search budget ran out before an answer.
+    /// Undecided: the search budget ran out before an answer (neither a placement nor
+    /// a proof that none exists). `stuck[..len]` are the request indices (ascending)
+    /// the search was placing when it stopped: the one at the deepest open choice and
+    /// the requests its rejections came from.
     TooHard {
         /// Steps spent.
         steps: u64,
+        /// Request indices.
+        stuck: [u16; MAX_CONFLICT],
+        /// Number of valid entries in `stuck`.
+        len: u8,
     },
 }
 
@@ -208,6 +218,18 @@ pub fn admit(
     out: &mut [Placement],
     budget: u64,
 ) -> Result<AdmitStats, AdmissionError> {
+    admit_with(slots_per_cycle, requests, out, budget, true)
+}
+
+/// [`admit`]; `shrink`: minimise the core of an infeasible set (a deletion filter of up
+/// to `n` more searches, which [`suggest_periods`] does not need).
+fn admit_with(
+    slots_per_cycle: u32,
+    requests: &[HrtRequest],
+    out: &mut [Placement],
+    budget: u64,
+    shrink: bool,
+) -> Result<AdmitStats, AdmissionError> {
     let n = requests.len();
     if n > MAX_HRT || out.len() < n {
         return Err(AdmissionError::TooMany { count: n });
@@ -239,10 +261,17 @@ pub fn admit(
                 reserved_slots: reserved,
             })
         }
-        Outcome::TooHard => Err(AdmissionError::TooHard { steps }),
+        Outcome::TooHard(stuck) => {
+            let (stuck, len) = indices(&stuck);
+            Err(AdmissionError::TooHard { steps, stuck, len })
+        }
         Outcome::Infeasible(core) => {
-            let core = shrink_core(slots_per_cycle, requests, core, &mut steps, budget);
-            Err(infeasible(&core))
+            let core = if shrink {
+                shrink_core(slots_per_cycle, requests, core, &mut steps, budget)
+            } else {
+                core
+            };
+            Err(infeasible(&core, requests))
         }
     }
 }
@@ -285,14 +314,53 @@ fn precheck(slots_per_cycle: u32, requests: &[HrtRequest]) -> Result<(u64, u64),
     Ok((hyper, reserved))
 }
 
-fn infeasible(core: &Set) -> AdmissionError {
-    let mut conflict = [0u16; MAX_CONFLICT];
+/// `Infeasible` for `core`. A core larger than `MAX_CONFLICT` (a capacity argument) is
+/// represented by its most demanding members (utilisation `f/p`, then index), which
+/// are the ones worth changing.
+fn infeasible(core: &Set, requests: &[HrtRequest]) -> AdmissionError {
+    let mut shown = *core;
+    while shown.len() > MAX_CONFLICT {
+        // Drop the least demanding member (latest index on ties).
+        let util = |i: usize| {
+            requests
+                .get(i)
+                .map_or((0, 1), |r| (u64::from(r.fragments), u64::from(r.period_slots)))
+        };
+        let least = shown.iter().fold(None::<usize>, |best, i| match best {
+            None => Some(i),
+            Some(b) => {
+                let ((fi, pi), (fb, pb)) = (util(i), util(b));
+                // i <= b in utilisation: fi / pi <= fb / pb.
+                if fi * pb <= fb * pi {
+                    Some(i)
+                } else {
+                    Some(b)
+                }
+            }
+        });
+        match least {
+            Some(i) => shown.remove(i),
+            None => break,
+        }
+    }
+    let (conflict, len) = indices(&shown);
+    let size = u16::try_from(core.len()).unwrap_or(u16::MAX);
+    AdmissionError::Infeasible {
+        conflict,
+        len,
+        size,
+    }
+}
+
+/// The first `MAX_CONFLICT` members of `set`, ascending.
+fn indices(set: &Set) -> ([u16; MAX_CONFLICT], u8) {
+    let mut out = [0u16; MAX_CONFLICT];
     let mut len = 0u8;
-    for (slot, i) in conflict.iter_mut().zip(core.iter()) {
+    for (slot, i) in out.iter_mut().zip(set.iter()) {
         *slot = u16::try_from(i).unwrap_or(u16::MAX);
         len += 1;
     }
-    AdmissionError::Infeasible { conflict, len }
+    (out, len)
 }
 
 /// Deletion filter: drops every member whose removal leaves the rest infeasible (the
@@ -326,7 +394,7 @@ fn shrink_core(
         ) {
             Outcome::Infeasible(smaller) => core = smaller,
             Outcome::Found => {}
-            Outcome::TooHard => break,
+            Outcome::TooHard(_) => break,
         }
     }
     core
@@ -335,7 +403,8 @@ fn shrink_core(
 enum Outcome {
     Found,
     Infeasible(Set),
-    TooHard,
+    /// Budget exhausted; the requests the search was stuck on.
+    TooHard(Set),
 }
 
 /// Exact CBJ search over the requests in `members`; phases land in `phases[index]`.
@@ -429,6 +498,25 @@ fn search(
         inv.set(d, v);
     };
 
+    // Hyperperiod of this subset (precheck bounded the whole set's by MAX_HYPERPERIOD_SLOTS).
+    let mut hyper = s.max(1);
+    for k in 0..n {
+        hyper = lcm(hyper, per.at(k)).unwrap_or(hyper);
+    }
+    let mut scratch = Classes::new();
+    let start = Placed {
+        slots_per_cycle: s,
+        hyper,
+        n,
+        per: &per,
+        frag: &frag,
+        phase: &phase,
+        same_prev: &same_prev,
+    };
+    if n > 0 && !start.room_for_rest(0, &mut scratch, steps) {
+        return Outcome::Infeasible(*members);
+    }
+
     let mut d = 0usize;
     if n > 0 {
         enter(0, &phase, &mut next, &mut conf, &mut inv, false);
@@ -447,7 +535,12 @@ fn search(
         while v < domain {
             *steps += 1;
             if *steps > budget {
-                return Outcome::TooHard;
+                let mut stuck = Set::EMPTY;
+                stuck.insert(usize::from(order.at(d)));
+                for k in conf.at(d).iter() {
+                    stuck.insert(usize::from(order.at(k)));
+                }
+                return Outcome::TooHard(stuck);
             }
             // Against the sync (phase 0, one fragment): need 1 <= v mod g <= g - f.
             let r = v % g_sync;
@@ -499,6 +592,32 @@ fn search(
         if found {
             phase.set(d, v);
             next.set(d, v + 1);
+            let view = Placed {
+                slots_per_cycle: s,
+                hyper,
+                n,
+                per: &per,
+                frag: &frag,
+                phase: &phase,
+                same_prev: &same_prev,
+            };
+            if d + 1 < n && !same_prev.at(d + 1) && !view.room_for_rest(d + 1, &mut scratch, steps)
+            {
+                // This value leaves the requests after it too few usable slots: reject
+                // it like a collision. The reason involves every earlier choice and
+                // every request still to place.
+                if let Some(c) = conf.at_mut(d) {
+                    for k in 0..d {
+                        c.insert(k);
+                    }
+                }
+                if let Some(c) = inv.at_mut(d) {
+                    for k in 0..n {
+                        c.insert(k);
+                    }
+                }
+                continue;
+            }
             d += 1;
             if d < n {
                 enter(d, &phase, &mut next, &mut conf, &mut inv, same_prev.at(d));
@@ -531,6 +650,180 @@ fn search(
         );
     }
     Outcome::Found
+}
+
+/// Most work units (class × placed run × request kind) one capacity bound may cost; a
+/// bigger bound is skipped (not pruning is always sound).
+const MAX_BOUND_WORK: u64 = 4_000_000;
+/// Work units of the capacity bound counted as one search step against the budget.
+const BOUND_WORK_PER_STEP: u64 = 256;
+
+/// Slots per hyperperiod as a bit set / counters indexed by residue class.
+struct Classes {
+    /// Free slots of each residue class (after the sync and the placed runs).
+    free: [u16; MAX_HYPERPERIOD_SLOTS as usize],
+    /// Start classes refused for the request kind being examined.
+    bad: Bits,
+    /// Slot classes the request kind being examined can occupy.
+    usable: Bits,
+    /// Union of `usable` over every kind still to place.
+    any: Bits,
+}
+
+impl Classes {
+    fn new() -> Self {
+        Classes {
+            free: [0; MAX_HYPERPERIOD_SLOTS as usize],
+            bad: Bits::EMPTY,
+            usable: Bits::EMPTY,
+            any: Bits::EMPTY,
+        }
+    }
+}
+
+/// The search state the capacity bound reads: depths `< d` are placed.
+struct Placed<'a> {
+    slots_per_cycle: u64,
+    hyper: u64,
+    n: usize,
+    per: &'a Tab<u64>,
+    frag: &'a Tab<u64>,
+    phase: &'a Tab<u64>,
+    same_prev: &'a Tab<bool>,
+}
+
+impl Placed<'_> {
+    /// Capacity bound per residue class (sound, never refuses a feasible state):
+    /// with `m = gcd` of the periods still to place, each of those runs stays in fixed
+    /// residue classes mod `m`. A placed run (or the sync) whose period shares a
+    /// divisor `g | m` with a request kind forbids whole start classes to it. The slots
+    /// the unplaced requests need per hyperperiod must fit in the free slots of the
+    /// classes they can still reach, per kind and all together. Catches, e.g., one
+    /// period-12 message on a 64-slot cycle that makes a quarter of all classes
+    /// unusable for 199 period-64/512/1024 messages, which plain backtracking would
+    /// only refute by enumerating their permutations.
+    fn room_for_rest(&self, d: usize, cl: &mut Classes, steps: &mut u64) -> bool {
+        let (s, hyper, n) = (self.slots_per_cycle, self.hyper, self.n);
+        let mut m = 0u64;
+        let mut kinds = 0u64;
+        for e in d..n {
+            m = gcd(m, self.per.at(e));
+            if e == d || !self.same_prev.at(e) {
+                kinds += 1;
+            }
+        }
+        let mu = usize::try_from(m).unwrap_or(usize::MAX);
+        if m == 0 || s == 0 || hyper % m != 0 || mu > cl.free.len() {
+            return true;
+        }
+        let work = kinds * (d as u64 + 1) * m + hyper;
+        if work > MAX_BOUND_WORK {
+            return true;
+        }
+        *steps += work / BOUND_WORK_PER_STEP;
+        let per_class = u16::try_from(hyper / m).unwrap_or(u16::MAX);
+        let free = cl.free.get_mut(..mu).unwrap_or(&mut []);
+        free.fill(per_class);
+        let mut take = |slot: u64| {
+            if let Some(f) = free.get_mut(((slot % hyper) % m) as usize) {
+                *f = f.saturating_sub(1);
+            }
+        };
+        let mut slot = 0;
+        while slot < hyper {
+            take(slot);
+            slot += s;
+        }
+        for k in 0..d {
+            let (p, f, ph) = (self.per.at(k), self.frag.at(k), self.phase.at(k));
+            let mut start = ph;
+            while p > 0 && start < hyper {
+                for j in 0..f {
+                    take(start + j);
+                }
+                start += p;
+            }
+        }
+        let mut total = 0u64;
+        cl.any.clear(mu);
+        let mut e = d;
+        while e < n {
+            let (q, f) = (self.per.at(e), self.frag.at(e));
+            let mut count = 1u64;
+            while e + (count as usize) < n && self.same_prev.at(e + count as usize) {
+                count += 1;
+            }
+            e += count as usize;
+            let demand = count * f * (hyper / q.max(1));
+            total += demand;
+            // Start classes this kind cannot use, against the sync and each placed run.
+            cl.bad.clear(mu);
+            let blocked = |g: u64, other_phase: u64, other_f: u64, bad: &mut Bits| {
+                if g == 0 || m % g != 0 {
+                    return;
+                }
+                for c in 0..m {
+                    let delta = (other_phase % g + g - c % g) % g;
+                    if f + other_f > g || delta < f || delta > g - other_f {
+                        bad.insert(c as usize);
+                    }
+                }
+            };
+            blocked(gcd(q, s), 0, 1, &mut cl.bad);
+            for k in 0..d {
+                blocked(gcd(q, self.per.at(k)), self.phase.at(k), self.frag.at(k), &mut cl.bad);
+            }
+            cl.usable.clear(mu);
+            for c in 0..mu {
+                if !cl.bad.contains(c) {
+                    for j in 0..f as usize {
+                        cl.usable.insert((c + j) % mu);
+                    }
+                }
+            }
+            let room: u64 = (0..mu)
+                .filter(|&c| cl.usable.contains(c))
+                .map(|c| u64::from(cl.free.get(c).copied().unwrap_or(0)))
+                .sum();
+            if demand > room {
+                return false;
+            }
+            cl.any.union_with(&cl.usable, mu);
+        }
+        let room: u64 = (0..mu)
+            .filter(|&c| cl.any.contains(c))
+            .map(|c| u64::from(cl.free.get(c).copied().unwrap_or(0)))
+            .sum();
+        total <= room
+    }
+}
+
+/// A bit set over residue classes `0..MAX_HYPERPERIOD_SLOTS`.
+struct Bits([u64; (MAX_HYPERPERIOD_SLOTS as usize).div_ceil(64)]);
+
+impl Bits {
+    const EMPTY: Bits = Bits([0; (MAX_HYPERPERIOD_SLOTS as usize).div_ceil(64)]);
+    /// Clears the bits `0..len`.
+    fn clear(&mut self, len: usize) {
+        let words = len.div_ceil(64).min(self.0.len());
+        if let Some(w) = self.0.get_mut(..words) {
+            w.fill(0);
+        }
+    }
+    fn insert(&mut self, i: usize) {
+        if let Some(w) = self.0.get_mut(i / 64) {
+            *w |= 1 << (i % 64);
+        }
+    }
+    fn contains(&self, i: usize) -> bool {
+        self.0.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+    }
+    fn union_with(&mut self, other: &Bits, len: usize) {
+        let words = len.div_ceil(64);
+        for (a, b) in self.0.iter_mut().zip(other.0.iter()).take(words) {
+            *a |= *b;
+        }
+    }
 }
 
 /// Admissible alternative periods for request `index`, the others unchanged, written to
@@ -581,7 +874,7 @@ pub fn suggest_periods(
                 continue;
             }
             tries += 1;
-            if admit(slots_per_cycle, set, &mut place, SUGGEST_BUDGET).is_ok() {
+            if admit_with(slots_per_cycle, set, &mut place, SUGGEST_BUDGET, false).is_ok() {
                 if let Some(o) = out.get_mut(written) {
                     *o = cand;
                     written += 1;
@@ -657,7 +950,11 @@ pub fn build_masks(
                         conflict[1] = (*o).max(me);
                         len = 2;
                     }
-                    return Err(AdmissionError::Infeasible { conflict, len });
+                    return Err(AdmissionError::Infeasible {
+                        conflict,
+                        len,
+                        size: u16::from(len),
+                    });
                 }
                 *o = me;
                 if let Some(m) = masks.get_mut((slot / s) as usize) {

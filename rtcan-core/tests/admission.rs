@@ -76,7 +76,7 @@ fn brute(s: u32, reqs: &[HrtRequest]) -> Option<Vec<u32>> {
 
 fn conflict_of(e: AdmissionError) -> Vec<usize> {
     match e {
-        AdmissionError::Infeasible { conflict, len } => conflict[..len as usize]
+        AdmissionError::Infeasible { conflict, len, .. } => conflict[..len as usize]
             .iter()
             .map(|&i| i as usize)
             .collect(),
@@ -254,7 +254,7 @@ fn too_hard_with_a_tiny_budget() {
     let mut pl = [Placement::default(); 9];
     assert_eq!(
         admit(60, &reqs, &mut pl, 3),
-        Err(AdmissionError::TooHard { steps: 4 })
+        Err(AdmissionError::TooHard { steps: 4, stuck: [3, 6, 0, 0, 0, 0, 0, 0], len: 2 })
     );
     let steps = admit(60, &reqs, &mut pl, BIG).unwrap().steps;
     assert_eq!(admit(60, &reqs, &mut pl, steps).map(|s| s.steps), Ok(steps));
@@ -430,7 +430,7 @@ proptest! {
                 // Necessary condition the paper states: never violated by an admitted set.
                 prop_assert_eq!(paper_rule(&reqs), Ok(()));
             }
-            Err(AdmissionError::Infeasible { conflict, len }) => {
+            Err(AdmissionError::Infeasible { conflict, len, .. }) => {
                 prop_assert!(truth.is_none());
                 let core: Vec<HrtRequest> = conflict[..len as usize].iter().map(|&i| reqs[i as usize]).collect();
                 prop_assert!(core.len() >= 2);

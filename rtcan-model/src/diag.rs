@@ -6,14 +6,16 @@ use std::ops::Range;
 /// Byte range in the robot.toml source.
 pub type Span = Range<usize>;
 
-/// Whether an error makes the input invalid, or only the robot not schedulable.
-/// `rtcan check` exits 2 for the first and 1 for the second.
+/// Whether an error makes the input invalid, the robot not schedulable, or admission
+/// undecided. `rtcan check` exits 2, 1 and 3 respectively.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Category {
     /// The description is malformed or inconsistent.
     Input,
     /// The description is well formed but the bus cannot carry it in time.
     Schedule,
+    /// The admission search ran out of budget: neither admitted nor refuted.
+    Undecided,
 }
 
 macro_rules! codes {
@@ -103,8 +105,9 @@ codes! {
     HyperperiodTooLong = "hyperperiod-too-long", Schedule;
     /// Too many HRT topics for the admission test.
     TooManyHrt = "too-many-hrt", Schedule;
-    /// The admission search hit its step budget.
-    AdmissionTooHard = "admission-too-hard", Schedule;
+    /// The admission search hit its step budget: neither a placement nor a proof that
+    /// none exists (undecided; the build refuses it too).
+    AdmissionUndecided = "admission-undecided", Undecided;
     /// HRT plus average SRT/NRT load exceeds the bus capacity.
     BusOverload = "bus-overload", Schedule;
     /// An SRT deadline shorter than the message's own transmission time.
@@ -233,6 +236,17 @@ impl Diagnostics {
                 .items
                 .iter()
                 .all(|d| d.code.category() == Category::Schedule)
+    }
+    /// True when admission was undecided and nothing else is wrong with the input (other
+    /// schedule errors may be present: the verdict is still open).
+    pub fn undecided(&self) -> bool {
+        self.items
+            .iter()
+            .any(|d| d.code.category() == Category::Undecided)
+            && self
+                .items
+                .iter()
+                .all(|d| d.code.category() != Category::Input)
     }
     /// The line index of [`Diagnostics::source`] (build it once for many lookups).
     pub fn index(&self) -> LineIndex {

@@ -42,15 +42,27 @@ pub enum Status {
     NotAdmissible,
     /// Invalid input.
     Invalid,
+    /// Valid input, but the admission search ran out of budget before deciding.
+    Undecided,
 }
 
 impl Status {
-    /// `rtcan check` exit code: 0, 1, 2.
+    /// `rtcan check` exit code: 0, 1, 2, 3 (docs/ROBOT_TOML.md).
     pub const fn exit_code(self) -> i32 {
         match self {
             Status::Admissible => 0,
             Status::NotAdmissible => 1,
             Status::Invalid => 2,
+            Status::Undecided => 3,
+        }
+    }
+    /// The `status` field of `rtcan check --json`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Status::Admissible => "admissible",
+            Status::NotAdmissible => "not-admissible",
+            Status::Invalid => "invalid",
+            Status::Undecided => "undecided",
         }
     }
 }
@@ -71,6 +83,8 @@ impl Analysis {
     pub fn status(&self) -> Status {
         if self.plan.is_some() && self.diagnostics.is_empty() {
             Status::Admissible
+        } else if self.model.is_some() && self.diagnostics.undecided() {
+            Status::Undecided
         } else if self.model.is_some() && self.diagnostics.only_schedule() {
             Status::NotAdmissible
         } else {

@@ -409,7 +409,7 @@ pub fn diagnostics_json(d: &Diagnostics) -> Value {
                 });
                 json!({
                     "code": x.code.name(),
-                    "category": match x.code.category() { crate::Category::Input => "input", crate::Category::Schedule => "schedule" },
+                    "category": match x.code.category() { crate::Category::Input => "input", crate::Category::Schedule => "schedule", crate::Category::Undecided => "undecided" },
                     "message": x.message,
                     "file": d.file,
                     "line": line,
@@ -426,11 +426,7 @@ pub fn diagnostics_json(d: &Diagnostics) -> Value {
 /// The documented JSON of a check (docs/ROBOT_TOML.md, "rtcan check --json").
 pub fn json(a: &Analysis) -> Value {
     let status = a.status();
-    let status_name = match status {
-        Status::Admissible => "admissible",
-        Status::NotAdmissible => "not-admissible",
-        Status::Invalid => "invalid",
-    };
+    let status_name = status.name();
     let mut v = json!({
         "file": a.diagnostics.file,
         "admissible": status == Status::Admissible,
