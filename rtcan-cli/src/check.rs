@@ -50,7 +50,9 @@ pub fn run(args: &[String]) -> i32 {
     } else if status == Status::NotAdmissible {
         out::println(&format!("{path}: not admissible"));
     } else if status == Status::Undecided {
-        out::println(&format!("{path}: undecided (admission search budget exhausted)"));
+        out::println(&format!(
+            "{path}: undecided (admission search budget exhausted)"
+        ));
     }
     status.exit_code()
 }

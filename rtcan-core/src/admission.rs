@@ -322,9 +322,9 @@ fn infeasible(core: &Set, requests: &[HrtRequest]) -> AdmissionError {
     while shown.len() > MAX_CONFLICT {
         // Drop the least demanding member (latest index on ties).
         let util = |i: usize| {
-            requests
-                .get(i)
-                .map_or((0, 1), |r| (u64::from(r.fragments), u64::from(r.period_slots)))
+            requests.get(i).map_or((0, 1), |r| {
+                (u64::from(r.fragments), u64::from(r.period_slots))
+            })
         };
         let least = shown.iter().fold(None::<usize>, |best, i| match best {
             None => Some(i),
@@ -408,6 +408,33 @@ enum Outcome {
 }
 
 /// Exact CBJ search over the requests in `members`; phases land in `phases[index]`.
+/// Variable orders the search tries in turn (see [`search`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Order {
+    /// Utilisation `f/p` descending (largest item first), then period, then index.
+    Utilisation,
+    /// Smallest phase domain first (the request whose period shares the smallest
+    /// divisors with the others: fewest distinct phases), then as `Utilisation`.
+    Domain,
+    /// Most inharmonic first: the request whose period neither divides nor is a
+    /// multiple of the most other periods, then as `Utilisation`.
+    Inharmonic,
+}
+
+/// Share of the budget (in 1/16) the search may have used when each attempt ends: the
+/// first order keeps the phases every robot got so far; a set it cannot decide
+/// quickly is retried smallest-domain-first (a period that breaks the harmony of the
+/// others, placed first, stops hundreds of permutations of the harmonic ones), then
+/// with the first order again for the rest of the budget.
+const ATTEMPTS: [(Order, u64); 4] = [
+    (Order::Utilisation, 1),
+    (Order::Domain, 6),
+    (Order::Inharmonic, 11),
+    (Order::Utilisation, 16),
+];
+
+/// Exact search over `members` with [`ATTEMPTS`]; `TooHard` only when the whole
+/// budget is spent.
 fn search(
     slots_per_cycle: u32,
     requests: &[HrtRequest],
@@ -415,6 +442,43 @@ fn search(
     phases: &mut Tab<u32>,
     steps: &mut u64,
     budget: u64,
+) -> Outcome {
+    let mut last = Outcome::TooHard(Set::EMPTY);
+    for (order, sixteenths) in ATTEMPTS {
+        let cap = if sixteenths >= 16 {
+            budget
+        } else {
+            budget / 16 * sixteenths
+        };
+        if *steps > cap {
+            continue;
+        }
+        last = search_order(
+            slots_per_cycle,
+            requests,
+            members,
+            phases,
+            steps,
+            cap,
+            order,
+        );
+        if !matches!(last, Outcome::TooHard(_)) {
+            return last;
+        }
+    }
+    last
+}
+
+/// Exact CBJ search over `members` in one static variable order; gives up once
+/// `steps` exceeds `budget`.
+fn search_order(
+    slots_per_cycle: u32,
+    requests: &[HrtRequest],
+    members: &Set,
+    phases: &mut Tab<u32>,
+    steps: &mut u64,
+    budget: u64,
+    by: Order,
 ) -> Outcome {
     let s = u64::from(slots_per_cycle);
     // Static order: most constrained first (see module docs).
@@ -430,12 +494,48 @@ fn search(
             fragments: 1,
         })
     };
+    // Phase domain of each member: lcm of its gcds with the sync and every other member.
+    let mut domain_of = Tab::<u64>::new();
+    if by == Order::Inharmonic {
+        // Key: members whose period is not harmonic with this one (ascending sort key:
+        // MAX_HRT minus that count).
+        for i in members.iter() {
+            let p = req(i).period_slots;
+            let mut count = 0u64;
+            for k in members.iter() {
+                let q = req(k).period_slots;
+                if p != 0 && q != 0 && p % q != 0 && q % p != 0 {
+                    count += 1;
+                }
+            }
+            domain_of.set(i, MAX_HRT as u64 - count.min(MAX_HRT as u64));
+        }
+    }
+    if by == Order::Domain {
+        for i in members.iter() {
+            let p = u64::from(req(i).period_slots);
+            let mut g_all = gcd(p, s);
+            for k in members.iter() {
+                if k != i && g_all != p {
+                    g_all = lcm(g_all, gcd(p, u64::from(req(k).period_slots))).unwrap_or(p);
+                }
+            }
+            domain_of.set(i, g_all);
+        }
+    }
     order.as_mut_slice(n).sort_unstable_by(|&a, &b| {
         let (ra, rb) = (req(usize::from(a)), req(usize::from(b)));
         // Utilisation f/p descending, then period ascending, then index.
         let ua = u64::from(ra.fragments) * u64::from(rb.period_slots);
         let ub = u64::from(rb.fragments) * u64::from(ra.period_slots);
-        ub.cmp(&ua)
+        let first = match by {
+            Order::Utilisation => core::cmp::Ordering::Equal,
+            Order::Domain | Order::Inharmonic => domain_of
+                .at(usize::from(a))
+                .cmp(&domain_of.at(usize::from(b))),
+        };
+        first
+            .then(ub.cmp(&ua))
             .then(ra.period_slots.cmp(&rb.period_slots))
             .then(a.cmp(&b))
     });
@@ -656,7 +756,7 @@ fn search(
 /// bigger bound is skipped (not pruning is always sound).
 const MAX_BOUND_WORK: u64 = 4_000_000;
 /// Work units of the capacity bound counted as one search step against the budget.
-const BOUND_WORK_PER_STEP: u64 = 256;
+const BOUND_WORK_PER_STEP: u64 = 16;
 
 /// Slots per hyperperiod as a bit set / counters indexed by residue class.
 struct Classes {
@@ -759,7 +859,7 @@ impl Placed<'_> {
             // Start classes this kind cannot use, against the sync and each placed run.
             cl.bad.clear(mu);
             let blocked = |g: u64, other_phase: u64, other_f: u64, bad: &mut Bits| {
-                if g == 0 || m % g != 0 {
+                if g == 0 || !m.is_multiple_of(g) {
                     return;
                 }
                 for c in 0..m {
@@ -771,7 +871,12 @@ impl Placed<'_> {
             };
             blocked(gcd(q, s), 0, 1, &mut cl.bad);
             for k in 0..d {
-                blocked(gcd(q, self.per.at(k)), self.phase.at(k), self.frag.at(k), &mut cl.bad);
+                blocked(
+                    gcd(q, self.per.at(k)),
+                    self.phase.at(k),
+                    self.frag.at(k),
+                    &mut cl.bad,
+                );
             }
             cl.usable.clear(mu);
             for c in 0..mu {

@@ -276,7 +276,13 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
             let culprit = idx.first().copied();
             let named: Vec<String> = idx
                 .iter()
-                .map(|i| format!("`{}` (period {})", name_of(*i), fmt_period(model, period_of(*i))))
+                .map(|i| {
+                    format!(
+                        "`{}` (period {})",
+                        name_of(*i),
+                        fmt_period(model, period_of(*i))
+                    )
+                })
                 .collect();
             let mut d = Diagnostic::new(
                 Code::AdmissionUndecided,

@@ -222,3 +222,67 @@ fn over_capacity_note_counts_what_it_cuts() {
         d.notes[0]
     );
 }
+
+/// Issue 9: one period of robots/hrt200.toml changed to 12 slots ran admission for
+/// 9.3 s and ended "gave up after 20000001 steps", pointing at `[bus]`. Now decided:
+/// not admissible, pointing at the period-12 topic, with admissible periods for it.
+#[test]
+fn hrt200_with_one_period_of_12_is_decided() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/hrt200.toml");
+    let src = std::fs::read_to_string(path).unwrap();
+    let from =
+        "[topics.t004]\ntype = \"T\"\npublisher = \"n4\"\nclass = \"hrt\"\nperiod_slots = 64\n";
+    assert!(src.contains(from));
+    let src = src.replace(from, &from.replace("= 64", "= 12"));
+    let a = analyze("hrt200.toml", &src);
+    assert_eq!(
+        a.status(),
+        Status::NotAdmissible,
+        "{}",
+        a.diagnostics.render()
+    );
+    let d = &a.diagnostics.items[0];
+    assert_eq!(d.code, Code::InadmissibleHrt);
+    assert!(
+        d.message
+            .starts_with("topic `t004` has period 12 slots (444.444 Hz), not admissible with "),
+        "{}",
+        d.message
+    );
+    assert!(d.message.ends_with(
+        "more HRT topics: together they need more slots than the phases their periods leave free"
+    ));
+    assert_eq!(
+        d.help,
+        ["admissible periods for `t004`: 8 slots (666.667 Hz), 16 slots (333.333 Hz), 24 slots (222.222 Hz)"]
+    );
+    let rendered = a.diagnostics.render();
+    assert!(rendered.contains("--> hrt200.toml:97:16\n"), "{rendered}");
+}
+
+/// An undecided admission is its own status (exit code 3), not "not admissible".
+#[test]
+fn undecided_is_its_own_status() {
+    use rtcan_model::{Diagnostic, Diagnostics};
+    let mut a = analyze(
+        "robot.toml",
+        &format!("{HEADER}[nodes.n]\nmodule = \"m\"\n"),
+    );
+    assert_eq!(a.status(), Status::Admissible);
+    a.plan = None;
+    a.diagnostics = Diagnostics {
+        file: "robot.toml".into(),
+        source: String::new(),
+        items: vec![Diagnostic::new(Code::AdmissionUndecided, None, "undecided")],
+    };
+    assert_eq!(a.status(), Status::Undecided);
+    assert_eq!(a.status().exit_code(), 3);
+    let v: Value = serde_json::from_str(&report::json_text(&a)).unwrap();
+    assert_eq!(v["status"], "undecided");
+    assert_eq!(v["diagnostics"][0]["category"], "undecided");
+    // With an input error as well, the input error decides.
+    a.diagnostics
+        .items
+        .push(Diagnostic::new(Code::BadValue, None, "bad"));
+    assert_eq!(a.status(), Status::Invalid);
+}
