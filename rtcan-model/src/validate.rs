@@ -478,10 +478,10 @@ const COMMON_BITRATES: &[u32] = &[
 fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
     for m in modules {
         if names::RESERVED_MODULE_NAMES.contains(&m.key.as_str()) {
-            let what = if m.key == "topics" {
-                "the generated module holding the topic constants"
-            } else {
-                "a primitive type the generated message structs use"
+            let what = match m.key.as_str() {
+                "topics" => "the generated module holding the topic constants",
+                "rtcan" => "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
+                _ => "a primitive type the generated message structs use",
             };
             v.push(
                 Diagnostic::new(
