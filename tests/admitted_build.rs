@@ -42,39 +42,162 @@ const BUS: &str = "[bus]\ncycle = \"10ms\"\nslots = 20\nmaster = \"main\"\n\n";
 
 /// Types named like prelude, core and generated items.
 const TYPE_NAMES: &[&str] = &[
-    "Option", "Some", "None", "Result", "Ok", "Err", "Default", "Clone", "Copy", "Debug",
-    "PartialEq", "Eq", "Hash", "Send", "Sync", "Sized", "Fn", "Box", "Vec", "String", "Message",
-    "Topic", "TopicInfo", "Engine", "Nanos", "Writer", "Reader", "Field", "Wire", "Node",
-    "Publisher", "Subscriber", "ModuleHost", "BUS", "MASTER", "FINGERPRINT", "SIZE", "A", "U8",
-    "SelfMsg", "Core", "Rtcan",
+    "Option",
+    "Some",
+    "None",
+    "Result",
+    "Ok",
+    "Err",
+    "Default",
+    "Clone",
+    "Copy",
+    "Debug",
+    "PartialEq",
+    "Eq",
+    "Hash",
+    "Send",
+    "Sync",
+    "Sized",
+    "Fn",
+    "Box",
+    "Vec",
+    "String",
+    "Message",
+    "Topic",
+    "TopicInfo",
+    "Engine",
+    "Nanos",
+    "Writer",
+    "Reader",
+    "Field",
+    "Wire",
+    "Node",
+    "Publisher",
+    "Subscriber",
+    "ModuleHost",
+    "BUS",
+    "MASTER",
+    "FINGERPRINT",
+    "SIZE",
+    "A",
+    "U8",
+    "SelfMsg",
+    "Core",
+    "Rtcan",
 ];
 
 /// Fields named like what the generated `encode`/`decode` use, primitives, near-keywords.
 const FIELD_NAMES: &[&str] = &[
-    "w", "r", "out", "bytes", "size", "len", "u8", "f32", "bool", "str", "default", "encode",
-    "decode", "put", "take", "zero", "self_", "type_", "r_type", "core", "std", "rtcan", "some",
-    "none", "ok", "err", "option", "clone", "hash", "string", "unions", "abstract_", "a1", "a_1",
+    "w",
+    "r",
+    "out",
+    "bytes",
+    "size",
+    "len",
+    "u8",
+    "f32",
+    "bool",
+    "str",
+    "default",
+    "encode",
+    "decode",
+    "put",
+    "take",
+    "zero",
+    "self_",
+    "type_",
+    "r_type",
+    "core",
+    "std",
+    "rtcan",
+    "some",
+    "none",
+    "ok",
+    "err",
+    "option",
+    "clone",
+    "hash",
+    "string",
+    "unions",
+    "abstract_",
+    "a1",
+    "a_1",
 ];
 
 /// Modules named like generated items, crates and the items inside a module.
 const MODULE_NAMES: &[&str] = &[
-    "core", "std", "alloc", "rtcan_", "nodes", "pool", "tx", "rx", "reset", "engine", "host",
-    "index", "bus", "master", "fingerprint", "topics_", "status", "tables", "filters", "a",
+    "core",
+    "std",
+    "alloc",
+    "rtcan_",
+    "nodes",
+    "pool",
+    "tx",
+    "rx",
+    "reset",
+    "engine",
+    "host",
+    "index",
+    "bus",
+    "master",
+    "fingerprint",
+    "topics_",
+    "status",
+    "tables",
+    "filters",
+    "a",
 ];
 
 /// Nodes named like items of the module's `nodes`/`topics` modules and crates.
 const NODE_NAMES: &[&str] = &[
-    "nodes", "topics", "node", "priority", "core", "std", "pool", "super_", "reset", "tx", "rx",
-    "engine", "host", "main_node",
+    "nodes",
+    "topics",
+    "node",
+    "priority",
+    "core",
+    "std",
+    "pool",
+    "super_",
+    "reset",
+    "tx",
+    "rx",
+    "engine",
+    "host",
+    "main_node",
 ];
 
 /// Topics named like items next to them (`all`, `pool`, `tx`, `rx`), handles of other
 /// topics (`x` and `x_pub`), crates, and near-collisions after CamelCase (`ab1` vs
 /// `a_b1` → `Ab1Topic` / `AB1Topic`).
 const TOPIC_NAMES: &[&str] = &[
-    "all", "pool", "tx", "rx", "node", "priority", "nodes", "core", "std", "topics", "info",
-    "reset", "status", "x", "x_pub", "x_sub", "x_pub_sub", "ab1", "a_b1", "engine", "host",
-    "index", "bus", "master", "fingerprint", "topic", "a1b", "a1_b",
+    "all",
+    "pool",
+    "tx",
+    "rx",
+    "node",
+    "priority",
+    "nodes",
+    "core",
+    "std",
+    "topics",
+    "info",
+    "reset",
+    "status",
+    "x",
+    "x_pub",
+    "x_sub",
+    "x_pub_sub",
+    "ab1",
+    "a_b1",
+    "engine",
+    "host",
+    "index",
+    "bus",
+    "master",
+    "fingerprint",
+    "topic",
+    "a1b",
+    "a1_b",
 ];
 
 /// Robots whose names are all hostile; returns (file stem, text).
@@ -101,7 +224,11 @@ fn hostile_robots() -> Vec<(String, String)> {
     ));
 
     // Modules: one node each, publishing to the next module.
-    let names: Vec<&str> = MODULE_NAMES.iter().copied().chain([long.as_str()]).collect();
+    let names: Vec<&str> = MODULE_NAMES
+        .iter()
+        .copied()
+        .chain([long.as_str()])
+        .collect();
     let mut s = BUS.replace("master = \"main\"", &format!("master = \"{}\"", names[0]));
     s += "[types.T]\nv = \"u16\"\n";
     for (i, m) in names.iter().enumerate() {
@@ -155,12 +282,20 @@ fn every_robot_check_admits_builds() {
         }
     }
     // The repository's robot files that must be admitted (and therefore build).
-    for must in ["robot.toml", "robots/rtcan-paper.toml", "robots/hrt200.toml", "tests/robots/codec.toml"] {
+    for must in [
+        "robot.toml",
+        "robots/rtcan-paper.toml",
+        "robots/hrt200.toml",
+        "tests/robots/codec.toml",
+    ] {
         assert!(admitted.contains(&root().join(must)), "{must} not admitted");
     }
     // The UI suite's build-only failures of before (a module named `topics`, a pool of
     // 42 blocks) are now refused by check.
-    for must in ["tests/ui/robots/reserved-module.toml", "tests/ui/robots/pool-too-large.toml"] {
+    for must in [
+        "tests/ui/robots/reserved-module.toml",
+        "tests/ui/robots/pool-too-large.toml",
+    ] {
         assert!(refused.contains(&root().join(must)), "{must} admitted");
     }
     for (stem, text) in hostile_robots() {
@@ -168,7 +303,12 @@ fn every_robot_check_admits_builds() {
         std::fs::write(&path, &text).unwrap();
         let a = analyze(&path.display().to_string(), &text);
         // Every hostile name is a legal name: all of these robots must be admitted.
-        assert_eq!(a.status(), Status::Admissible, "{stem}: {}", a.diagnostics.render());
+        assert_eq!(
+            a.status(),
+            Status::Admissible,
+            "{stem}: {}",
+            a.diagnostics.render()
+        );
         admitted.push(path);
     }
 

@@ -816,11 +816,12 @@ impl Placed<'_> {
         if m == 0 || s == 0 || hyper % m != 0 || mu > cl.free.len() {
             return true;
         }
+        // Upper bound of the work below (each placed run marks at most m classes).
         let work = kinds * (d as u64 + 1) * m + hyper;
         if work > MAX_BOUND_WORK {
             return true;
         }
-        *steps += work / BOUND_WORK_PER_STEP;
+        *steps += (hyper + kinds * m) / BOUND_WORK_PER_STEP;
         let per_class = u16::try_from(hyper / m).unwrap_or(u16::MAX);
         let free = cl.free.get_mut(..mu).unwrap_or(&mut []);
         free.fill(per_class);
@@ -858,16 +859,29 @@ impl Placed<'_> {
             total += demand;
             // Start classes this kind cannot use, against the sync and each placed run.
             cl.bad.clear(mu);
-            let blocked = |g: u64, other_phase: u64, other_f: u64, bad: &mut Bits| {
+            // Run `other` (phase, fragments) forbids the start residues mod g (g | m)
+            // `other_phase - (f - 1) ..= other_phase + other_f - 1`: f + other_f - 1
+            // consecutive residues, each standing for m / g classes mod m.
+            let mut marked = 0u64;
+            let mut blocked = |g: u64, other_phase: u64, other_f: u64, bad: &mut Bits| {
                 if g == 0 || !m.is_multiple_of(g) {
                     return;
                 }
-                for c in 0..m {
-                    let delta = (other_phase % g + g - c % g) % g;
-                    if f + other_f > g || delta < f || delta > g - other_f {
+                let width = f + other_f - 1;
+                if width >= g {
+                    bad.fill(mu);
+                    marked += m;
+                    return;
+                }
+                let first = (other_phase % g + g - (f - 1) % g) % g;
+                for r in 0..width {
+                    let mut c = (first + r) % g;
+                    while c < m {
                         bad.insert(c as usize);
+                        c += g;
                     }
                 }
+                marked += width * (m / g);
             };
             blocked(gcd(q, s), 0, 1, &mut cl.bad);
             for k in 0..d {
@@ -878,6 +892,7 @@ impl Placed<'_> {
                     &mut cl.bad,
                 );
             }
+            *steps += marked / BOUND_WORK_PER_STEP;
             cl.usable.clear(mu);
             for c in 0..mu {
                 if !cl.bad.contains(c) {
@@ -922,6 +937,13 @@ impl Bits {
     }
     fn contains(&self, i: usize) -> bool {
         self.0.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+    }
+    /// Sets the bits `0..len` (and possibly a few above, in the last word).
+    fn fill(&mut self, len: usize) {
+        let words = len.div_ceil(64).min(self.0.len());
+        if let Some(w) = self.0.get_mut(..words) {
+            w.fill(u64::MAX);
+        }
     }
     fn union_with(&mut self, other: &Bits, len: usize) {
         let words = len.div_ceil(64);

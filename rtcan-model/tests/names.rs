@@ -141,7 +141,10 @@ fn topics_colliding_after_camel_case_are_refused() {
 fn modules_named_like_generated_items_or_primitives_are_refused() {
     for (name, what) in [
         ("topics", "the generated module holding the topic constants"),
-        ("rtcan", "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)"),
+        (
+            "rtcan",
+            "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
+        ),
         ("u8", "a primitive type the generated message structs use"),
         ("f32", "a primitive type the generated message structs use"),
         ("bool", "a primitive type the generated message structs use"),
