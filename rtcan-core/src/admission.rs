@@ -847,6 +847,7 @@ impl Placed<'_> {
         }
         let mut total = 0u64;
         cl.any.clear(mu);
+        let mut first = true;
         let mut e = d;
         while e < n {
             let (q, f) = (self.per.at(e), self.frag.at(e));
@@ -906,8 +907,17 @@ impl Placed<'_> {
                 .map(|c| u64::from(cl.free.get(c).copied().unwrap_or(0)))
                 .sum();
             if demand > room {
+                // When the very next kind has no room, the search itself refutes it at
+                // the next depth with precise conflict sets (its backjump skips the
+                // placements that did not matter); a prune here would blame every
+                // earlier choice and backtrack chronologically. Prune only for what
+                // the search sees late: later kinds, and the total.
+                if first {
+                    return true;
+                }
                 return false;
             }
+            first = false;
             cl.any.union_with(&cl.usable, mu);
         }
         let room: u64 = (0..mu)
