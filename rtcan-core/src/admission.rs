@@ -112,9 +112,9 @@ pub enum AdmissionError {
         size: u16,
     },
     /// Undecided: the search budget ran out before an answer (neither a placement nor
-    /// a proof that none exists). `stuck[..len]` are the request indices (ascending)
-    /// the search was placing when it stopped: the one at the deepest open choice and
-    /// the requests its rejections came from.
+    /// a proof that none exists). `stuck[..len]` are request indices: `stuck[0]` the
+    /// request the search was placing when it stopped, then the requests its
+    /// rejections came from, latest choice first.
     TooHard {
         /// Steps spent.
         steps: u64,
@@ -261,10 +261,7 @@ fn admit_with(
                 reserved_slots: reserved,
             })
         }
-        Outcome::TooHard(stuck) => {
-            let (stuck, len) = indices(&stuck);
-            Err(AdmissionError::TooHard { steps, stuck, len })
-        }
+        Outcome::TooHard(stuck, len) => Err(AdmissionError::TooHard { steps, stuck, len }),
         Outcome::Infeasible(core) => {
             let core = if shrink {
                 shrink_core(slots_per_cycle, requests, core, &mut steps, budget)
@@ -394,7 +391,7 @@ fn shrink_core(
         ) {
             Outcome::Infeasible(smaller) => core = smaller,
             Outcome::Found => {}
-            Outcome::TooHard(_) => break,
+            Outcome::TooHard(..) => break,
         }
     }
     core
@@ -403,8 +400,8 @@ fn shrink_core(
 enum Outcome {
     Found,
     Infeasible(Set),
-    /// Budget exhausted; the requests the search was stuck on.
-    TooHard(Set),
+    /// Budget exhausted; the requests the search was stuck on (`AdmissionError::TooHard`).
+    TooHard([u16; MAX_CONFLICT], u8),
 }
 
 /// Exact CBJ search over the requests in `members`; phases land in `phases[index]`.
@@ -443,7 +440,7 @@ fn search(
     steps: &mut u64,
     budget: u64,
 ) -> Outcome {
-    let mut last = Outcome::TooHard(Set::EMPTY);
+    let mut last = Outcome::TooHard([0; MAX_CONFLICT], 0);
     for (order, sixteenths) in ATTEMPTS {
         let cap = if sixteenths >= 16 {
             budget
@@ -462,7 +459,7 @@ fn search(
             cap,
             order,
         );
-        if !matches!(last, Outcome::TooHard(_)) {
+        if !matches!(last, Outcome::TooHard(..)) {
             return last;
         }
     }
@@ -635,12 +632,21 @@ fn search_order(
         while v < domain {
             *steps += 1;
             if *steps > budget {
-                let mut stuck = Set::EMPTY;
-                stuck.insert(usize::from(order.at(d)));
-                for k in conf.at(d).iter() {
-                    stuck.insert(usize::from(order.at(k)));
+                // The request being placed, then its culprits, latest choice first.
+                let mut stuck = [order.at(d); MAX_CONFLICT];
+                let mut len = 1u8;
+                let culprits = conf.at(d);
+                for k in (0..d).rev().filter(|&k| culprits.contains(k)) {
+                    match stuck.get_mut(usize::from(len)) {
+                        Some(slot) => *slot = order.at(k),
+                        None => break,
+                    }
+                    len += 1;
                 }
-                return Outcome::TooHard(stuck);
+                for slot in stuck.iter_mut().skip(usize::from(len)) {
+                    *slot = 0;
+                }
+                return Outcome::TooHard(stuck, len);
             }
             // Against the sync (phase 0, one fragment): need 1 <= v mod g <= g - f.
             let r = v % g_sync;
