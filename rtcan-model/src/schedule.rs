@@ -294,8 +294,15 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
                 ),
             )
             .help("use harmonic periods (each dividing the next) to make the search easy");
-            if !named.is_empty() {
-                d = d.note(format!("the search was stuck placing {}", named.join(", ")));
+            if let Some((first, rest)) = named.split_first() {
+                d = d.note(if rest.is_empty() {
+                    format!("the search was placing {first} when it stopped")
+                } else {
+                    format!(
+                        "the search was placing {first} when it stopped; its phases collided with {}",
+                        rest.join(", ")
+                    )
+                });
             }
             d.note("an undecided robot is refused like an inadmissible one (`rtcan check` exits 3)")
         }
