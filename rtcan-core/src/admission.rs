@@ -913,15 +913,14 @@ impl Placed<'_> {
                 .map(|c| u64::from(cl.free.get(c).copied().unwrap_or(0)))
                 .sum();
             if demand > room {
-                // When the very next kind has no room, the search itself refutes it at
-                // the next depth with precise conflict sets (its backjump skips the
-                // placements that did not matter); a prune here would blame every
-                // earlier choice and backtrack chronologically. Prune only for what
-                // the search sees late: later kinds, and the total.
-                if first {
-                    return true;
-                }
-                return false;
+                // When the very next request has no room at all (or is alone of its
+                // kind), the search itself refutes it at the next depth with precise
+                // conflict sets: its backjump skips the placements that did not
+                // matter, where a prune here would blame every earlier choice and
+                // backtrack chronologically. A pigeonhole over several identical
+                // requests (39 period-64 messages in 31 usable classes) is pruned:
+                // the search would enumerate their placements.
+                return first && (room == 0 || count == 1);
             }
             first = false;
             cl.any.union_with(&cl.usable, mu);
