@@ -1,6 +1,7 @@
 //! HRT admission and phase assignment (exact search) plus the paper's rule as a named
 //! baseline. Runs at build time in rtcan-model; no_std, no allocation: all scratch lives
-//! in fixed tables of `MAX_HRT` entries on the stack (about 30 KiB).
+//! in fixed tables on the stack (`MAX_HRT` entries, and one counter per slot of the
+//! longest hyperperiod for the capacity bound: about 60 KiB).
 //!
 //! # Model
 //! Slots are counted from slot 0 of cycle 0. Request `i` with period `p`, `f` fragments
@@ -35,7 +36,19 @@
 //!   (symmetry breaking; any placement can be permuted into that form);
 //! - a dead end jumps back to the latest variable that caused a rejection (CBJ). The
 //!   variables used by the refutation are tracked, so "infeasible" comes with a core,
-//!   which a deletion filter then shrinks.
+//!   which a deletion filter then shrinks;
+//! - a capacity bound per residue class prunes where CBJ alone would enumerate
+//!   permutations: with `m` the gcd of the periods still to place, every remaining run
+//!   stays in fixed classes mod `m`; placed runs whose periods share a divisor `g | m`
+//!   with a remaining kind forbid it whole classes; the slots still needed must fit in
+//!   the free slots of the classes still usable (per kind and in total). It decides,
+//!   e.g., `robots/hrt200.toml` with one period changed to 12 slots (a quarter of the
+//!   classes lost to 199 harmonic messages), which plain CBJ gave up on after 20 M
+//!   steps;
+//! - a set the first order cannot decide in 1/16 of the budget is retried with the
+//!   smallest phase domain first, then the most inharmonic period first, then the first
+//!   order again (see `ATTEMPTS`); the first order keeps the phases robots got before.
+//!   Running out of budget is `TooHard` ("undecided"), never "infeasible".
 //!
 //! The 2014 C code accepted only harmonic periods and first-fit single-slot phases and
 //! was never called (original-rtcan-code.md §4); the paper's rule ("periods not
