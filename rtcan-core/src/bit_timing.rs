@@ -88,7 +88,7 @@ impl BitTiming {
         (1 + self.ts1 as u32) * 1000 / self.quanta()
     }
 
-    /// The bxCAN `CAN_BTR` value (SJW[25:24], TS2[22:20], TS1[19:16], BRP[9:0], each minus one).
+    /// The bxCAN `CAN_BTR` value (`SJW[25:24]`, `TS2[22:20]`, `TS1[19:16]`, `BRP[9:0]`, each minus one).
     pub const fn btr(&self) -> u32 {
         ((self.sjw as u32 - 1) << 24)
             | ((self.ts2 as u32 - 1) << 20)
