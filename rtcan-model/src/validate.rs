@@ -503,8 +503,10 @@ fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
                     Code::NameCollision,
                     t.key_span.clone(),
                     format!(
-                        "topics `{first}` and `{}` both become the Rust type `{alias}`",
-                        clip_name(&t.key)
+                        "topics `{}` and `{}` both become the Rust type `{}`",
+                        clip_name(first),
+                        clip_name(&t.key),
+                        clip_name(&alias)
                     ),
                 )
                 .help("names that differ only in underscores collide after conversion to CamelCase: rename one"),
