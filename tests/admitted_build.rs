@@ -264,6 +264,26 @@ fn hostile_robots() -> Vec<(String, String)> {
         s += &format!("[topics.{t}]\ntype = \"T\"\npublisher = \"n\"\n{class}\nsubscribers = [\"f\", \"n\"]\n");
     }
     out.push(("topics".to_string(), s));
+
+    // Payload edges: an empty message, the largest one, every array type, one field of
+    // each primitive; single- and multi-frame, on every class.
+    let mut s = BUS
+        .replace("slots = 20", "slots = 10")
+        .replace("cycle = \"10ms\"", "cycle = \"100ms\"");
+    s += "[types.Empty]\n[types.Max]\nv = \"[u8; 1022]\"\n[types.Arrays]\n";
+    for p in [
+        "u8", "u16", "u32", "u64", "i8", "i16", "i32", "i64", "f32", "f64", "bool",
+    ] {
+        s += &format!("a_{p} = \"[{p}; 2]\"\n{p}_ = \"{p}\"\n");
+    }
+    s += "[modules.main]\nboard = \"stm32f103re\"\n[modules.far]\nboard = \"stm32f103re\"\n[nodes.n]\nmodule = \"main\"\n[nodes.f]\nmodule = \"far\"\n";
+    for (i, ty) in ["Empty", "Max", "Arrays"].iter().enumerate() {
+        s += &format!("[topics.nrt_{i}]\ntype = \"{ty}\"\npublisher = \"n\"\nclass = \"nrt\"\nsubscribers = [\"f\"]\n");
+        s += &format!("[topics.srt_{i}]\ntype = \"{ty}\"\npublisher = \"f\"\nclass = \"srt\"\ndeadline = \"1s\"\nsubscribers = [\"n\"]\n");
+    }
+    s += "[topics.hrt_0]\ntype = \"Empty\"\npublisher = \"n\"\nclass = \"hrt\"\nperiod_slots = 10\nsubscribers = [\"f\"]\n";
+    s += "[types.Pair]\nv = \"[u16; 5]\"\n[topics.hrt_2]\ntype = \"Pair\"\npublisher = \"f\"\nclass = \"hrt\"\nperiod_slots = 20\nsubscribers = [\"n\"]\n";
+    out.push(("payloads".to_string(), s));
     out
 }
 
