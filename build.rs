@@ -28,17 +28,15 @@ fn main() {
         }
     };
     println!("cargo::rerun-if-changed={}", path.display());
-    let source = match std::fs::read_to_string(&path) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!(
-                "error: cannot read robot description `{}`: {e}",
-                path.display()
-            );
-            exit(1);
-        }
+    // The same reading rules as `rtcan check` and `rtcan::robot!` (UTF-8, 16 MiB cap).
+    let analysis = match rtcan_model::read_source(&path, &shown) {
+        Ok(source) => rtcan_model::analyze(&shown, &source),
+        Err(diagnostics) => rtcan_model::Analysis {
+            model: None,
+            plan: None,
+            diagnostics,
+        },
     };
-    let analysis = rtcan_model::analyze(&shown, &source);
     let plan = match analysis.plan {
         Some(p) if analysis.diagnostics.is_empty() => p,
         _ => {

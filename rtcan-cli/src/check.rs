@@ -1,8 +1,10 @@
 //! `rtcan check robot.toml [--json]`: the same analysis as the build (rtcan-model), printed
 //! for a person (plan, load, filters, calendar) or as JSON (docs/ROBOT_TOML.md).
-use rtcan_model::{analyze, report, Analysis, Code, Diagnostic, Diagnostics, Status};
+use crate::out;
+use rtcan_model::{analyze, read_source, report, Analysis, Status};
+use std::path::Path;
 
-/// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage.
+/// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage, 3 undecided.
 pub fn run(args: &[String]) -> i32 {
     let mut json = false;
     let mut path: Option<&str> = None;
@@ -28,32 +30,29 @@ pub fn run(args: &[String]) -> i32 {
         eprintln!("error: missing robot.toml (usage: rtcan check <robot.toml> [--json])");
         return 2;
     };
-    let analysis = match std::fs::read_to_string(path) {
+    let analysis = match read_source(Path::new(path), path) {
         Ok(source) => analyze(path, &source),
-        Err(e) => Analysis {
+        Err(diagnostics) => Analysis {
             model: None,
             plan: None,
-            diagnostics: Diagnostics {
-                file: path.to_string(),
-                source: String::new(),
-                items: vec![Diagnostic::new(
-                    Code::Io,
-                    None,
-                    format!("cannot read `{path}`: {e}"),
-                )],
-            },
+            diagnostics,
         },
     };
     let status = analysis.status();
+    // A reader that stops early (`| head -1`) ends the output, not the command.
     if !analysis.diagnostics.is_empty() {
-        eprint!("{}", analysis.diagnostics.render());
+        out::eprint(&analysis.diagnostics.render());
     }
     if json {
-        println!("{}", report::json_text(&analysis));
+        out::println(&report::json_text(&analysis));
     } else if let Some(plan) = &analysis.plan {
-        print!("{}", report::text(plan));
+        out::print(&report::text(plan));
     } else if status == Status::NotAdmissible {
-        println!("{path}: not admissible");
+        out::println(&format!("{path}: not admissible"));
+    } else if status == Status::Undecided {
+        out::println(&format!(
+            "{path}: undecided (admission search budget exhausted)"
+        ));
     }
     status.exit_code()
 }

@@ -1,6 +1,7 @@
 //! The `rtcan` command. One file per subcommand; this file only dispatches.
 mod check;
 mod decode;
+mod out;
 mod sim;
 
 const USAGE: &str = "\
@@ -8,7 +9,8 @@ usage: rtcan <command> [args]
 
 commands:
   check <robot.toml> [--json]   validate, admit and plan a robot; print the plan
-                                exit 0 admissible, 1 not admissible, 2 invalid input
+                                exit 0 admissible, 1 not admissible, 2 invalid input,
+                                3 undecided (admission search budget exhausted)
   sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N] [--seed S]
       [--load X] [--ber P] [--json] [--out DIR] [--sweep] [--master-dies-at S]
                                 simulate the robot on a bit-accurate bus (docs/SIM.md;

@@ -94,3 +94,57 @@ fn json_output_and_exit_codes() {
     assert_eq!(code, 2);
     assert!(out.contains("\"status\": \"invalid\""));
 }
+
+/// `rtcan check ... | head -1`: the reader closes the pipe after one line; the command
+/// must stop writing quietly, not panic with "failed printing to stdout" (exit 101).
+#[test]
+fn closed_stdout_pipe_is_not_a_panic() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    // The JSON plan of 200 HRT topics is ~150 KB, more than a pipe buffers.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rtcan"))
+        .args(["check", "robots/hrt200.toml", "--json"])
+        .current_dir(root())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert_eq!(first, "{\n");
+    // The reader is dropped here: the pipe is closed.
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(out.status.code(), Some(0), "{err}");
+}
+
+/// A device that never ends is refused at the size cap, quickly and clearly.
+#[test]
+fn endless_input_hits_the_size_cap() {
+    let (code, out, err) = rtcan(&["check", "/dev/zero"]);
+    assert_eq!(code, 2);
+    assert!(out.is_empty());
+    assert!(
+        err.starts_with("error[file-too-large]: `/dev/zero` is larger than 16 MiB\n"),
+        "{err}"
+    );
+}
+
+/// Invalid UTF-8 is reported with its byte offset, line and column.
+#[test]
+fn invalid_utf8_names_the_byte() {
+    let dir = std::env::temp_dir().join(format!("rtcan-utf8-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("robot.toml");
+    std::fs::write(&file, b"[bus]\nmaster = \"m\xff\"\n").unwrap();
+    let (code, _, err) = rtcan(&["check", file.to_str().unwrap()]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("error[invalid-utf8]: invalid UTF-8 at byte 17 (line 2, column 12)"),
+        "{err}"
+    );
+    assert!(err.contains(":2:12\n"), "{err}");
+}

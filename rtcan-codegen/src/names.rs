@@ -1,5 +1,6 @@
 //! Rust names derived from robot.toml names (the model guarantees snake_case, non-keyword
-//! names for fields, modules, nodes and topics, and CamelCase-able type names).
+//! names for fields, modules, nodes and topics, CamelCase non-keyword type names, and no
+//! collisions between the derived names: `rtcan_model::names`).
 use proc_macro2::{Ident, Span, TokenStream};
 use quote::quote;
 use rtcan_model::Plan;
@@ -14,17 +15,10 @@ pub fn upper(name: &str) -> Ident {
     ident(&name.to_ascii_uppercase())
 }
 
-/// `wheel_setpoints` → `WheelSetpoints`.
+/// `wheel_setpoints` → `WheelSetpoints` (the model's conversion, whose collisions
+/// `rtcan check` refuses).
 pub fn camel(name: &str) -> String {
-    name.split('_')
-        .filter(|p| !p.is_empty())
-        .map(|p| {
-            let mut c = p.chars();
-            c.next()
-                .map(|f| f.to_ascii_uppercase().to_string() + c.as_str())
-                .unwrap_or_default()
-        })
-        .collect()
+    rtcan_model::names::camel(name)
 }
 
 /// `wheel_setpoints` + `Topic` → `WheelSetpointsTopic`.
@@ -32,8 +26,9 @@ pub fn camel_suffixed(name: &str, suffix: &str) -> Ident {
     ident(&(camel(name) + suffix))
 }
 
-/// `topics` is the only name the generated code itself places next to the module modules.
-pub const RESERVED_MODULE_NAMES: &[&str] = &["topics"];
+/// Module names the generated code cannot use (the model refuses them first; this stays
+/// as the generator's own guard).
+pub use rtcan_model::names::RESERVED_MODULE_NAMES;
 
 /// A `compile_error!` for a module whose name clashes with a generated item (the model's
 /// names are valid identifiers; this is a constraint of this generator's layout only).
@@ -44,7 +39,7 @@ pub fn reserved_clashes(plan: &Plan) -> TokenStream {
         .filter(|m| RESERVED_MODULE_NAMES.contains(&m.name.as_str()))
         .map(|m| {
             let msg = format!(
-                "{}: module name `{}` is reserved by the generated code (it holds the topic constants); rename the module",
+                "{}: module name `{}` is reserved by the generated code; rename the module",
                 plan.file, m.name
             );
             quote! { ::core::compile_error!(#msg); }

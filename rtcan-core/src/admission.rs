@@ -1,6 +1,7 @@
 //! HRT admission and phase assignment (exact search) plus the paper's rule as a named
 //! baseline. Runs at build time in rtcan-model; no_std, no allocation: all scratch lives
-//! in fixed tables of `MAX_HRT` entries on the stack (about 30 KiB).
+//! in fixed tables on the stack (`MAX_HRT` entries, and one counter per slot of the
+//! longest hyperperiod for the capacity bound: about 60 KiB).
 //!
 //! # Model
 //! Slots are counted from slot 0 of cycle 0. Request `i` with period `p`, `f` fragments
@@ -35,7 +36,19 @@
 //!   (symmetry breaking; any placement can be permuted into that form);
 //! - a dead end jumps back to the latest variable that caused a rejection (CBJ). The
 //!   variables used by the refutation are tracked, so "infeasible" comes with a core,
-//!   which a deletion filter then shrinks.
+//!   which a deletion filter then shrinks;
+//! - a capacity bound per residue class prunes where CBJ alone would enumerate
+//!   permutations: with `m` the gcd of the periods still to place, every remaining run
+//!   stays in fixed classes mod `m`; placed runs whose periods share a divisor `g | m`
+//!   with a remaining kind forbid it whole classes; the slots still needed must fit in
+//!   the free slots of the classes still usable (per kind and in total). It decides,
+//!   e.g., `robots/hrt200.toml` with one period changed to 12 slots (a quarter of the
+//!   classes lost to 199 harmonic messages), which plain CBJ gave up on after 20 M
+//!   steps;
+//! - a set the first order cannot decide in 1/16 of the budget is retried with the
+//!   smallest phase domain first, then the most inharmonic period first, then the first
+//!   order again (see `ATTEMPTS`); the first order keeps the phases robots got before.
+//!   Running out of budget is `TooHard` ("undecided"), never "infeasible".
 //!
 //! The 2014 C code accepted only harmonic periods and first-fit single-slot phases and
 //! was never called (original-rtcan-code.md §4); the paper's rule ("periods not
@@ -107,11 +120,21 @@ pub enum AdmissionError {
         conflict: [u16; MAX_CONFLICT],
         /// Number of valid entries in `conflict`.
         len: u8,
+        /// Requests in the core found (`> len` when `conflict` is truncated, e.g. a
+        /// capacity argument over many requests).
+        size: u16,
     },
-    /// The search budget ran out before an answer.
+    /// Undecided: the search budget ran out before an answer (neither a placement nor
+    /// a proof that none exists). `stuck[..len]` are request indices: `stuck[0]` the
+    /// request the search was placing when it stopped, then the requests its
+    /// rejections came from, latest choice first.
     TooHard {
         /// Steps spent.
         steps: u64,
+        /// Request indices.
+        stuck: [u16; MAX_CONFLICT],
+        /// Number of valid entries in `stuck`.
+        len: u8,
     },
 }
 
@@ -208,6 +231,18 @@ pub fn admit(
     out: &mut [Placement],
     budget: u64,
 ) -> Result<AdmitStats, AdmissionError> {
+    admit_with(slots_per_cycle, requests, out, budget, true)
+}
+
+/// [`admit`]; `shrink`: minimise the core of an infeasible set (a deletion filter of up
+/// to `n` more searches, which [`suggest_periods`] does not need).
+fn admit_with(
+    slots_per_cycle: u32,
+    requests: &[HrtRequest],
+    out: &mut [Placement],
+    budget: u64,
+    shrink: bool,
+) -> Result<AdmitStats, AdmissionError> {
     let n = requests.len();
     if n > MAX_HRT || out.len() < n {
         return Err(AdmissionError::TooMany { count: n });
@@ -239,10 +274,14 @@ pub fn admit(
                 reserved_slots: reserved,
             })
         }
-        Outcome::TooHard => Err(AdmissionError::TooHard { steps }),
+        Outcome::TooHard(stuck, len) => Err(AdmissionError::TooHard { steps, stuck, len }),
         Outcome::Infeasible(core) => {
-            let core = shrink_core(slots_per_cycle, requests, core, &mut steps, budget);
-            Err(infeasible(&core))
+            let core = if shrink {
+                shrink_core(slots_per_cycle, requests, core, &mut steps, budget)
+            } else {
+                core
+            };
+            Err(infeasible(&core, requests))
         }
     }
 }
@@ -285,14 +324,53 @@ fn precheck(slots_per_cycle: u32, requests: &[HrtRequest]) -> Result<(u64, u64),
     Ok((hyper, reserved))
 }
 
-fn infeasible(core: &Set) -> AdmissionError {
-    let mut conflict = [0u16; MAX_CONFLICT];
+/// `Infeasible` for `core`. A core larger than `MAX_CONFLICT` (a capacity argument) is
+/// represented by its most demanding members (utilisation `f/p`, then index), which
+/// are the ones worth changing.
+fn infeasible(core: &Set, requests: &[HrtRequest]) -> AdmissionError {
+    let mut shown = *core;
+    while shown.len() > MAX_CONFLICT {
+        // Drop the least demanding member (latest index on ties).
+        let util = |i: usize| {
+            requests.get(i).map_or((0, 1), |r| {
+                (u64::from(r.fragments), u64::from(r.period_slots))
+            })
+        };
+        let least = shown.iter().fold(None::<usize>, |best, i| match best {
+            None => Some(i),
+            Some(b) => {
+                let ((fi, pi), (fb, pb)) = (util(i), util(b));
+                // i <= b in utilisation: fi / pi <= fb / pb.
+                if fi * pb <= fb * pi {
+                    Some(i)
+                } else {
+                    Some(b)
+                }
+            }
+        });
+        match least {
+            Some(i) => shown.remove(i),
+            None => break,
+        }
+    }
+    let (conflict, len) = indices(&shown);
+    let size = u16::try_from(core.len()).unwrap_or(u16::MAX);
+    AdmissionError::Infeasible {
+        conflict,
+        len,
+        size,
+    }
+}
+
+/// The first `MAX_CONFLICT` members of `set`, ascending.
+fn indices(set: &Set) -> ([u16; MAX_CONFLICT], u8) {
+    let mut out = [0u16; MAX_CONFLICT];
     let mut len = 0u8;
-    for (slot, i) in conflict.iter_mut().zip(core.iter()) {
+    for (slot, i) in out.iter_mut().zip(set.iter()) {
         *slot = u16::try_from(i).unwrap_or(u16::MAX);
         len += 1;
     }
-    AdmissionError::Infeasible { conflict, len }
+    (out, len)
 }
 
 /// Deletion filter: drops every member whose removal leaves the rest infeasible (the
@@ -326,7 +404,7 @@ fn shrink_core(
         ) {
             Outcome::Infeasible(smaller) => core = smaller,
             Outcome::Found => {}
-            Outcome::TooHard => break,
+            Outcome::TooHard(..) => break,
         }
     }
     core
@@ -335,10 +413,38 @@ fn shrink_core(
 enum Outcome {
     Found,
     Infeasible(Set),
-    TooHard,
+    /// Budget exhausted; the requests the search was stuck on (`AdmissionError::TooHard`).
+    TooHard([u16; MAX_CONFLICT], u8),
 }
 
 /// Exact CBJ search over the requests in `members`; phases land in `phases[index]`.
+/// Variable orders the search tries in turn (see [`search`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Order {
+    /// Utilisation `f/p` descending (largest item first), then period, then index.
+    Utilisation,
+    /// Smallest phase domain first (the request whose period shares the smallest
+    /// divisors with the others: fewest distinct phases), then as `Utilisation`.
+    Domain,
+    /// Most inharmonic first: the request whose period neither divides nor is a
+    /// multiple of the most other periods, then as `Utilisation`.
+    Inharmonic,
+}
+
+/// Share of the budget (in 1/16) the search may have used when each attempt ends: the
+/// first order keeps the phases every robot got so far; a set it cannot decide
+/// quickly is retried smallest-domain-first (a period that breaks the harmony of the
+/// others, placed first, stops hundreds of permutations of the harmonic ones), then
+/// with the first order again for the rest of the budget.
+const ATTEMPTS: [(Order, u64); 4] = [
+    (Order::Utilisation, 1),
+    (Order::Domain, 6),
+    (Order::Inharmonic, 11),
+    (Order::Utilisation, 16),
+];
+
+/// Exact search over `members` with [`ATTEMPTS`]; `TooHard` only when the whole
+/// budget is spent.
 fn search(
     slots_per_cycle: u32,
     requests: &[HrtRequest],
@@ -346,6 +452,43 @@ fn search(
     phases: &mut Tab<u32>,
     steps: &mut u64,
     budget: u64,
+) -> Outcome {
+    let mut last = Outcome::TooHard([0; MAX_CONFLICT], 0);
+    for (order, sixteenths) in ATTEMPTS {
+        let cap = if sixteenths >= 16 {
+            budget
+        } else {
+            budget / 16 * sixteenths
+        };
+        if *steps > cap {
+            continue;
+        }
+        last = search_order(
+            slots_per_cycle,
+            requests,
+            members,
+            phases,
+            steps,
+            cap,
+            order,
+        );
+        if !matches!(last, Outcome::TooHard(..)) {
+            return last;
+        }
+    }
+    last
+}
+
+/// Exact CBJ search over `members` in one static variable order; gives up once
+/// `steps` exceeds `budget`.
+fn search_order(
+    slots_per_cycle: u32,
+    requests: &[HrtRequest],
+    members: &Set,
+    phases: &mut Tab<u32>,
+    steps: &mut u64,
+    budget: u64,
+    by: Order,
 ) -> Outcome {
     let s = u64::from(slots_per_cycle);
     // Static order: most constrained first (see module docs).
@@ -361,12 +504,48 @@ fn search(
             fragments: 1,
         })
     };
+    // Phase domain of each member: lcm of its gcds with the sync and every other member.
+    let mut domain_of = Tab::<u64>::new();
+    if by == Order::Inharmonic {
+        // Key: members whose period is not harmonic with this one (ascending sort key:
+        // MAX_HRT minus that count).
+        for i in members.iter() {
+            let p = req(i).period_slots;
+            let mut count = 0u64;
+            for k in members.iter() {
+                let q = req(k).period_slots;
+                if p != 0 && q != 0 && p % q != 0 && q % p != 0 {
+                    count += 1;
+                }
+            }
+            domain_of.set(i, MAX_HRT as u64 - count.min(MAX_HRT as u64));
+        }
+    }
+    if by == Order::Domain {
+        for i in members.iter() {
+            let p = u64::from(req(i).period_slots);
+            let mut g_all = gcd(p, s);
+            for k in members.iter() {
+                if k != i && g_all != p {
+                    g_all = lcm(g_all, gcd(p, u64::from(req(k).period_slots))).unwrap_or(p);
+                }
+            }
+            domain_of.set(i, g_all);
+        }
+    }
     order.as_mut_slice(n).sort_unstable_by(|&a, &b| {
         let (ra, rb) = (req(usize::from(a)), req(usize::from(b)));
         // Utilisation f/p descending, then period ascending, then index.
         let ua = u64::from(ra.fragments) * u64::from(rb.period_slots);
         let ub = u64::from(rb.fragments) * u64::from(ra.period_slots);
-        ub.cmp(&ua)
+        let first = match by {
+            Order::Utilisation => core::cmp::Ordering::Equal,
+            Order::Domain | Order::Inharmonic => domain_of
+                .at(usize::from(a))
+                .cmp(&domain_of.at(usize::from(b))),
+        };
+        first
+            .then(ub.cmp(&ua))
             .then(ra.period_slots.cmp(&rb.period_slots))
             .then(a.cmp(&b))
     });
@@ -429,6 +608,25 @@ fn search(
         inv.set(d, v);
     };
 
+    // Hyperperiod of this subset (precheck bounded the whole set's by MAX_HYPERPERIOD_SLOTS).
+    let mut hyper = s.max(1);
+    for k in 0..n {
+        hyper = lcm(hyper, per.at(k)).unwrap_or(hyper);
+    }
+    let mut scratch = Classes::new();
+    let start = Placed {
+        slots_per_cycle: s,
+        hyper,
+        n,
+        per: &per,
+        frag: &frag,
+        phase: &phase,
+        same_prev: &same_prev,
+    };
+    if n > 0 && !start.room_for_rest(0, &mut scratch, steps) {
+        return Outcome::Infeasible(*members);
+    }
+
     let mut d = 0usize;
     if n > 0 {
         enter(0, &phase, &mut next, &mut conf, &mut inv, false);
@@ -447,7 +645,21 @@ fn search(
         while v < domain {
             *steps += 1;
             if *steps > budget {
-                return Outcome::TooHard;
+                // The request being placed, then its culprits, latest choice first.
+                let mut stuck = [order.at(d); MAX_CONFLICT];
+                let mut len = 1u8;
+                let culprits = conf.at(d);
+                for k in (0..d).rev().filter(|&k| culprits.contains(k)) {
+                    match stuck.get_mut(usize::from(len)) {
+                        Some(slot) => *slot = order.at(k),
+                        None => break,
+                    }
+                    len += 1;
+                }
+                for slot in stuck.iter_mut().skip(usize::from(len)) {
+                    *slot = 0;
+                }
+                return Outcome::TooHard(stuck, len);
             }
             // Against the sync (phase 0, one fragment): need 1 <= v mod g <= g - f.
             let r = v % g_sync;
@@ -499,6 +711,32 @@ fn search(
         if found {
             phase.set(d, v);
             next.set(d, v + 1);
+            let view = Placed {
+                slots_per_cycle: s,
+                hyper,
+                n,
+                per: &per,
+                frag: &frag,
+                phase: &phase,
+                same_prev: &same_prev,
+            };
+            if d + 1 < n && !same_prev.at(d + 1) && !view.room_for_rest(d + 1, &mut scratch, steps)
+            {
+                // This value leaves the requests after it too few usable slots: reject
+                // it like a collision. The reason involves every earlier choice and
+                // every request still to place.
+                if let Some(c) = conf.at_mut(d) {
+                    for k in 0..d {
+                        c.insert(k);
+                    }
+                }
+                if let Some(c) = inv.at_mut(d) {
+                    for k in 0..n {
+                        c.insert(k);
+                    }
+                }
+                continue;
+            }
             d += 1;
             if d < n {
                 enter(d, &phase, &mut next, &mut conf, &mut inv, same_prev.at(d));
@@ -531,6 +769,216 @@ fn search(
         );
     }
     Outcome::Found
+}
+
+/// Most work units (class × placed run × request kind) one capacity bound may cost; a
+/// bigger bound is skipped (not pruning is always sound).
+const MAX_BOUND_WORK: u64 = 4_000_000;
+/// Work units of the capacity bound counted as one search step against the budget.
+const BOUND_WORK_PER_STEP: u64 = 16;
+
+/// Slots per hyperperiod as a bit set / counters indexed by residue class.
+struct Classes {
+    /// Free slots of each residue class (after the sync and the placed runs).
+    free: [u16; MAX_HYPERPERIOD_SLOTS as usize],
+    /// Start classes refused for the request kind being examined.
+    bad: Bits,
+    /// Slot classes the request kind being examined can occupy.
+    usable: Bits,
+    /// Union of `usable` over every kind still to place.
+    any: Bits,
+}
+
+impl Classes {
+    fn new() -> Self {
+        Classes {
+            free: [0; MAX_HYPERPERIOD_SLOTS as usize],
+            bad: Bits::EMPTY,
+            usable: Bits::EMPTY,
+            any: Bits::EMPTY,
+        }
+    }
+}
+
+/// The search state the capacity bound reads: depths `< d` are placed.
+struct Placed<'a> {
+    slots_per_cycle: u64,
+    hyper: u64,
+    n: usize,
+    per: &'a Tab<u64>,
+    frag: &'a Tab<u64>,
+    phase: &'a Tab<u64>,
+    same_prev: &'a Tab<bool>,
+}
+
+impl Placed<'_> {
+    /// Capacity bound per residue class (sound, never refuses a feasible state):
+    /// with `m = gcd` of the periods still to place, each of those runs stays in fixed
+    /// residue classes mod `m`. A placed run (or the sync) whose period shares a
+    /// divisor `g | m` with a request kind forbids whole start classes to it. The slots
+    /// the unplaced requests need per hyperperiod must fit in the free slots of the
+    /// classes they can still reach, per kind and all together. Catches, e.g., one
+    /// period-12 message on a 64-slot cycle that makes a quarter of all classes
+    /// unusable for 199 period-64/512/1024 messages, which plain backtracking would
+    /// only refute by enumerating their permutations.
+    fn room_for_rest(&self, d: usize, cl: &mut Classes, steps: &mut u64) -> bool {
+        let (s, hyper, n) = (self.slots_per_cycle, self.hyper, self.n);
+        let mut m = 0u64;
+        let mut kinds = 0u64;
+        for e in d..n {
+            m = gcd(m, self.per.at(e));
+            if e == d || !self.same_prev.at(e) {
+                kinds += 1;
+            }
+        }
+        let mu = usize::try_from(m).unwrap_or(usize::MAX);
+        if m == 0 || s == 0 || hyper % m != 0 || mu > cl.free.len() {
+            return true;
+        }
+        // Upper bound of the work below (each placed run marks at most m classes).
+        let work = kinds * (d as u64 + 1) * m + hyper;
+        if work > MAX_BOUND_WORK {
+            return true;
+        }
+        *steps += (hyper + kinds * m) / BOUND_WORK_PER_STEP;
+        let per_class = u16::try_from(hyper / m).unwrap_or(u16::MAX);
+        let free = cl.free.get_mut(..mu).unwrap_or(&mut []);
+        free.fill(per_class);
+        let mut take = |slot: u64| {
+            if let Some(f) = free.get_mut(((slot % hyper) % m) as usize) {
+                *f = f.saturating_sub(1);
+            }
+        };
+        let mut slot = 0;
+        while slot < hyper {
+            take(slot);
+            slot += s;
+        }
+        for k in 0..d {
+            let (p, f, ph) = (self.per.at(k), self.frag.at(k), self.phase.at(k));
+            let mut start = ph;
+            while p > 0 && start < hyper {
+                for j in 0..f {
+                    take(start + j);
+                }
+                start += p;
+            }
+        }
+        let mut total = 0u64;
+        cl.any.clear(mu);
+        let mut first = true;
+        let mut e = d;
+        while e < n {
+            let (q, f) = (self.per.at(e), self.frag.at(e));
+            let mut count = 1u64;
+            while e + (count as usize) < n && self.same_prev.at(e + count as usize) {
+                count += 1;
+            }
+            e += count as usize;
+            let demand = count * f * (hyper / q.max(1));
+            total += demand;
+            // Start classes this kind cannot use, against the sync and each placed run.
+            cl.bad.clear(mu);
+            // Run `other` (phase, fragments) forbids the start residues mod g (g | m)
+            // `other_phase - (f - 1) ..= other_phase + other_f - 1`: f + other_f - 1
+            // consecutive residues, each standing for m / g classes mod m.
+            let mut marked = 0u64;
+            let mut blocked = |g: u64, other_phase: u64, other_f: u64, bad: &mut Bits| {
+                if g == 0 || !m.is_multiple_of(g) {
+                    return;
+                }
+                let width = f + other_f - 1;
+                if width >= g {
+                    bad.fill(mu);
+                    marked += m;
+                    return;
+                }
+                let first = (other_phase % g + g - (f - 1) % g) % g;
+                for r in 0..width {
+                    let mut c = (first + r) % g;
+                    while c < m {
+                        bad.insert(c as usize);
+                        c += g;
+                    }
+                }
+                marked += width * (m / g);
+            };
+            blocked(gcd(q, s), 0, 1, &mut cl.bad);
+            for k in 0..d {
+                blocked(
+                    gcd(q, self.per.at(k)),
+                    self.phase.at(k),
+                    self.frag.at(k),
+                    &mut cl.bad,
+                );
+            }
+            *steps += marked / BOUND_WORK_PER_STEP;
+            cl.usable.clear(mu);
+            for c in 0..mu {
+                if !cl.bad.contains(c) {
+                    for j in 0..f as usize {
+                        cl.usable.insert((c + j) % mu);
+                    }
+                }
+            }
+            let room: u64 = (0..mu)
+                .filter(|&c| cl.usable.contains(c))
+                .map(|c| u64::from(cl.free.get(c).copied().unwrap_or(0)))
+                .sum();
+            if demand > room {
+                // When the very next request has no room at all (or is alone of its
+                // kind), the search itself refutes it at the next depth with precise
+                // conflict sets: its backjump skips the placements that did not
+                // matter, where a prune here would blame every earlier choice and
+                // backtrack chronologically. A pigeonhole over several identical
+                // requests (39 period-64 messages in 31 usable classes) is pruned:
+                // the search would enumerate their placements.
+                return first && (room == 0 || count == 1);
+            }
+            first = false;
+            cl.any.union_with(&cl.usable, mu);
+        }
+        let room: u64 = (0..mu)
+            .filter(|&c| cl.any.contains(c))
+            .map(|c| u64::from(cl.free.get(c).copied().unwrap_or(0)))
+            .sum();
+        total <= room
+    }
+}
+
+/// A bit set over residue classes `0..MAX_HYPERPERIOD_SLOTS`.
+struct Bits([u64; (MAX_HYPERPERIOD_SLOTS as usize).div_ceil(64)]);
+
+impl Bits {
+    const EMPTY: Bits = Bits([0; (MAX_HYPERPERIOD_SLOTS as usize).div_ceil(64)]);
+    /// Clears the bits `0..len`.
+    fn clear(&mut self, len: usize) {
+        let words = len.div_ceil(64).min(self.0.len());
+        if let Some(w) = self.0.get_mut(..words) {
+            w.fill(0);
+        }
+    }
+    fn insert(&mut self, i: usize) {
+        if let Some(w) = self.0.get_mut(i / 64) {
+            *w |= 1 << (i % 64);
+        }
+    }
+    fn contains(&self, i: usize) -> bool {
+        self.0.get(i / 64).is_some_and(|w| w & (1 << (i % 64)) != 0)
+    }
+    /// Sets the bits `0..len` (and possibly a few above, in the last word).
+    fn fill(&mut self, len: usize) {
+        let words = len.div_ceil(64).min(self.0.len());
+        if let Some(w) = self.0.get_mut(..words) {
+            w.fill(u64::MAX);
+        }
+    }
+    fn union_with(&mut self, other: &Bits, len: usize) {
+        let words = len.div_ceil(64);
+        for (a, b) in self.0.iter_mut().zip(other.0.iter()).take(words) {
+            *a |= *b;
+        }
+    }
 }
 
 /// Admissible alternative periods for request `index`, the others unchanged, written to
@@ -581,7 +1029,7 @@ pub fn suggest_periods(
                 continue;
             }
             tries += 1;
-            if admit(slots_per_cycle, set, &mut place, SUGGEST_BUDGET).is_ok() {
+            if admit_with(slots_per_cycle, set, &mut place, SUGGEST_BUDGET, false).is_ok() {
                 if let Some(o) = out.get_mut(written) {
                     *o = cand;
                     written += 1;
@@ -657,7 +1105,11 @@ pub fn build_masks(
                         conflict[1] = (*o).max(me);
                         len = 2;
                     }
-                    return Err(AdmissionError::Infeasible { conflict, len });
+                    return Err(AdmissionError::Infeasible {
+                        conflict,
+                        len,
+                        size: u16::from(len),
+                    });
                 }
                 *o = me;
                 if let Some(m) = masks.get_mut((slot / s) as usize) {

@@ -17,6 +17,7 @@
 
 pub mod admission;
 pub mod arbiter;
+pub mod bit_timing;
 pub mod calendar;
 pub mod clock;
 pub mod confinement;

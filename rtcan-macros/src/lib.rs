@@ -83,21 +83,35 @@ fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
     let span = input.file.span();
     let rel = input.file.value();
     let abs = resolve(&rel, caller);
-    let source = match std::fs::read_to_string(&abs) {
-        Ok(s) => s,
-        Err(e) => return error(span, &format!("cannot read `{}`: {e}", abs.display())),
-    };
     // Diagnostics name the file as written, so messages are the same on every machine.
-    let analysis = rtcan_model::analyze(&rel, &source);
+    let analysis = match rtcan_model::read_source(&abs, &rel) {
+        Ok(source) => rtcan_model::analyze(&rel, &source),
+        Err(diagnostics) => rtcan_model::Analysis {
+            model: None,
+            plan: None,
+            diagnostics,
+        },
+    };
     let plan = match analysis.plan {
         Some(p) if analysis.diagnostics.is_empty() => p,
         _ => {
             let d = &analysis.diagnostics;
+            let index = d.index();
             let errs = d
                 .items
                 .iter()
-                .map(|item| error(span, &compile_message(d, item)));
-            return quote! { #(#errs)* };
+                .take(rtcan_model::diag::MAX_RENDERED)
+                .map(|item| error(span, &compile_message(d, &index, item)));
+            let rest = d.omitted().map(|n| {
+                error(
+                    span,
+                    &format!(
+                        "{n} more error(s) in {} not shown; `rtcan check {}` lists them all",
+                        d.file, d.file
+                    ),
+                )
+            });
+            return quote! { #(#errs)* #rest };
         }
     };
     let opts = rtcan_codegen::Options {
@@ -114,8 +128,12 @@ fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
 
 /// The model's rustc-style rendering, with its `error[code]: message` header turned into
 /// `message [code]`, because rustc already prints `error: ` before a `compile_error!`.
-fn compile_message(d: &rtcan_model::Diagnostics, item: &rtcan_model::Diagnostic) -> String {
-    let rendered = d.render_one(item);
+fn compile_message(
+    d: &rtcan_model::Diagnostics,
+    index: &rtcan_model::diag::LineIndex,
+    item: &rtcan_model::Diagnostic,
+) -> String {
+    let rendered = d.render_one_with(index, item);
     let body = rendered.split_once('\n').map_or("", |(_, rest)| rest);
     format!(
         "{} [{}]\n{}",

@@ -6,14 +6,16 @@ use std::ops::Range;
 /// Byte range in the robot.toml source.
 pub type Span = Range<usize>;
 
-/// Whether an error makes the input invalid, or only the robot not schedulable.
-/// `rtcan check` exits 2 for the first and 1 for the second.
+/// Whether an error makes the input invalid, the robot not schedulable, or admission
+/// undecided. `rtcan check` exits 2, 1 and 3 respectively.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Category {
     /// The description is malformed or inconsistent.
     Input,
     /// The description is well formed but the bus cannot carry it in time.
     Schedule,
+    /// The admission search ran out of budget: neither admitted nor refuted.
+    Undecided,
 }
 
 macro_rules! codes {
@@ -42,6 +44,12 @@ codes! {
     TomlSyntax = "toml-syntax", Input;
     /// The file could not be read.
     Io = "io", Input;
+    /// The file is larger than `MAX_SOURCE_BYTES` (16 MiB).
+    FileTooLarge = "file-too-large", Input;
+    /// The file is not UTF-8.
+    InvalidUtf8 = "invalid-utf8", Input;
+    /// Tables or arrays nested deeper than the parser accepts.
+    TooDeep = "too-deep", Input;
     /// A key the schema does not know.
     UnknownKey = "unknown-key", Input;
     /// A required key is absent.
@@ -54,6 +62,13 @@ codes! {
     BadName = "bad-name", Input;
     /// Two items with the same (normalised) name.
     DuplicateName = "duplicate-name", Input;
+    /// Names that collide in the generated code (`enc1` and `enc_1` → `Enc1Topic`), or
+    /// a module named like a generated item or a primitive type.
+    NameCollision = "name-collision", Input;
+    /// The bit rate is not reachable exactly from the CAN clock of a module's board.
+    BitrateUnreachable = "bitrate-unreachable", Input;
+    /// A topic's message pool exceeds what `rtcan_pubsub::Topic` supports.
+    PoolTooLarge = "pool-too-large", Input;
     /// A message type, or a field type, that does not exist.
     UnknownType = "unknown-type", Input;
     /// A node reference that does not exist.
@@ -90,8 +105,9 @@ codes! {
     HyperperiodTooLong = "hyperperiod-too-long", Schedule;
     /// Too many HRT topics for the admission test.
     TooManyHrt = "too-many-hrt", Schedule;
-    /// The admission search hit its step budget.
-    AdmissionTooHard = "admission-too-hard", Schedule;
+    /// The admission search hit its step budget: neither a placement nor a proof that
+    /// none exists (undecided; the build refuses it too).
+    AdmissionUndecided = "admission-undecided", Undecided;
     /// HRT plus average SRT/NRT load exceeds the bus capacity.
     BusOverload = "bus-overload", Schedule;
     /// An SRT deadline shorter than the message's own transmission time.
@@ -153,6 +169,67 @@ pub struct Diagnostics {
     pub items: Vec<Diagnostic>,
 }
 
+/// Most diagnostics [`Diagnostics::render`] prints in full; the rest are counted in one
+/// closing line (`--json` keeps them all).
+pub const MAX_RENDERED: usize = 50;
+
+/// Byte offset of every line start of a source, built once so that each position lookup
+/// is a binary search (48 000 errors in a 5 MB file cost 48 000 · log(lines), not
+/// 48 000 · 5 MB).
+#[derive(Clone, Debug)]
+pub struct LineIndex {
+    /// Byte offset where line k (0-based) starts; `starts[0] == 0`.
+    starts: Vec<usize>,
+    /// Whether line k is ASCII (then the column is the byte distance).
+    ascii: Vec<bool>,
+}
+
+impl LineIndex {
+    /// Scans `source` once.
+    pub fn new(source: &str) -> Self {
+        let mut starts = vec![0];
+        let mut ascii = Vec::new();
+        let mut line_ascii = true;
+        for (i, b) in source.bytes().enumerate() {
+            if b == b'\n' {
+                starts.push(i + 1);
+                ascii.push(line_ascii);
+                line_ascii = true;
+            } else if !b.is_ascii() {
+                line_ascii = false;
+            }
+        }
+        ascii.push(line_ascii);
+        LineIndex { starts, ascii }
+    }
+
+    /// 0-based line holding byte `offset`.
+    fn line_of(&self, offset: usize) -> usize {
+        self.starts
+            .partition_point(|&s| s <= offset)
+            .saturating_sub(1)
+    }
+
+    /// Byte offset of the start of the line holding `offset`.
+    pub fn line_start(&self, offset: usize) -> usize {
+        self.starts.get(self.line_of(offset)).copied().unwrap_or(0)
+    }
+
+    /// 1-based line and column (in characters) of a byte offset in `source` (the text
+    /// this index was built from), clamped to the source.
+    pub fn line_col(&self, source: &str, offset: usize) -> (usize, usize) {
+        let offset = floor_char_boundary(source, offset.min(source.len()));
+        let line = self.line_of(offset);
+        let start = self.starts.get(line).copied().unwrap_or(0).min(offset);
+        let col = if self.ascii.get(line).copied().unwrap_or(false) {
+            offset - start
+        } else {
+            source.get(start..offset).map_or(0, |s| s.chars().count())
+        };
+        (line + 1, col + 1)
+    }
+}
+
 impl Diagnostics {
     /// No errors.
     pub fn is_empty(&self) -> bool {
@@ -166,18 +243,43 @@ impl Diagnostics {
                 .iter()
                 .all(|d| d.code.category() == Category::Schedule)
     }
-    /// 1-based line and column (in characters) of a byte offset.
+    /// True when admission was undecided and nothing else is wrong with the input (other
+    /// schedule errors may be present: the verdict is still open).
+    pub fn undecided(&self) -> bool {
+        self.items
+            .iter()
+            .any(|d| d.code.category() == Category::Undecided)
+            && self
+                .items
+                .iter()
+                .all(|d| d.code.category() != Category::Input)
+    }
+    /// The line index of [`Diagnostics::source`] (build it once for many lookups).
+    pub fn index(&self) -> LineIndex {
+        LineIndex::new(&self.source)
+    }
+    /// 1-based line and column (in characters) of a byte offset. Scans the source: for
+    /// more than one lookup use [`Diagnostics::index`].
     pub fn line_col(&self, offset: usize) -> (usize, usize) {
         line_col(&self.source, offset)
     }
-    /// Every diagnostic rendered, separated by blank lines, plus a summary line.
+    /// The first [`MAX_RENDERED`] diagnostics rendered, separated by blank lines, then
+    /// how many more there are, then a summary line.
     pub fn render(&self) -> String {
+        let index = self.index();
         let mut out = String::new();
-        for d in &self.items {
-            out.push_str(&self.render_one(d));
+        for d in self.items.iter().take(MAX_RENDERED) {
+            out.push_str(&self.render_one_with(&index, d));
             out.push('\n');
         }
         let n = self.items.len();
+        if let Some(rest) = self.omitted() {
+            let _ = writeln!(
+                out,
+                "error: {rest} more {} not shown (the first {MAX_RENDERED} are above; `rtcan check --json` lists all)",
+                if rest == 1 { "error" } else { "errors" },
+            );
+        }
         let _ = writeln!(
             out,
             "error: {} {} in {}",
@@ -188,30 +290,46 @@ impl Diagnostics {
         out
     }
 
-    /// One diagnostic, rustc style.
+    /// How many diagnostics [`Diagnostics::render`] leaves out, if any.
+    pub fn omitted(&self) -> Option<usize> {
+        self.items
+            .len()
+            .checked_sub(MAX_RENDERED)
+            .filter(|&n| n > 0)
+    }
+
+    /// One diagnostic, rustc style. Scans the source: for many, use
+    /// [`Diagnostics::render_one_with`].
     pub fn render_one(&self, d: &Diagnostic) -> String {
+        self.render_one_with(&self.index(), d)
+    }
+
+    /// One diagnostic, rustc style, positions looked up in `index` (of this source).
+    pub fn render_one_with(&self, index: &LineIndex, d: &Diagnostic) -> String {
         let mut out = String::new();
         let _ = writeln!(out, "error[{}]: {}", d.code.name(), d.message);
         let mut gutter = 1;
         if let Some(span) = &d.span {
-            let start = span.start.min(self.source.len());
-            let (line, col) = self.line_col(start);
+            let start = floor_char_boundary(&self.source, span.start.min(self.source.len()));
+            let (line, col) = index.line_col(&self.source, start);
             gutter = line.to_string().len();
             let pad = " ".repeat(gutter);
             let _ = writeln!(out, "{pad}--> {}:{}:{}", self.file, line, col);
-            let text = line_text(&self.source, start);
+            let line_start = index.line_start(start).min(start);
+            let text = line_text_from(&self.source, line_start);
             let _ = writeln!(out, "{pad} |");
-            let _ = writeln!(out, "{line} | {text}");
+            let _ = writeln!(out, "{line} | {}", clip(text));
             // Caret under the span, clipped to the first line of a multi-line span.
-            let line_start = start - (col_bytes(&self.source, start));
             let line_end = line_start + text.len();
             let end = span.end.clamp(start, line_end.max(start));
             let width = self
                 .source
                 .get(start..end)
                 .map_or(1, |s| s.chars().count())
-                .max(1);
-            let _ = writeln!(out, "{pad} | {}{}", " ".repeat(col - 1), "^".repeat(width));
+                .clamp(1, MAX_EXCERPT);
+            if col <= MAX_EXCERPT {
+                let _ = writeln!(out, "{pad} | {}{}", " ".repeat(col - 1), "^".repeat(width));
+            }
         }
         let pad = " ".repeat(gutter);
         for h in &d.help {
@@ -224,13 +342,19 @@ impl Diagnostics {
     }
 }
 
-/// Bytes from the start of the line to `offset`.
-fn col_bytes(source: &str, offset: usize) -> usize {
-    let before = source.get(..offset).unwrap_or(source);
-    before.len() - before.rfind('\n').map_or(0, |i| i + 1)
+/// Longest excerpt line (characters) shown under a diagnostic: a 5 MB one-line file
+/// must not be copied into every error.
+const MAX_EXCERPT: usize = 240;
+
+fn clip(text: &str) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(MAX_EXCERPT) {
+        Some((i, _)) => format!("{} ...", text.get(..i).unwrap_or("")).into(),
+        None => text.into(),
+    }
 }
 
-/// 1-based line and character column of a byte offset (clamped to the source).
+/// 1-based line and character column of a byte offset (clamped to the source). Scans
+/// the source; [`LineIndex`] answers many lookups.
 pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
     let offset = floor_char_boundary(source, offset.min(source.len()));
     let before = source.get(..offset).unwrap_or("");
@@ -247,13 +371,8 @@ fn floor_char_boundary(s: &str, mut i: usize) -> usize {
     i
 }
 
-/// The text of the line holding `offset`, without its newline.
-fn line_text(source: &str, offset: usize) -> &str {
-    let offset = floor_char_boundary(source, offset.min(source.len()));
-    let start = source
-        .get(..offset)
-        .and_then(|s| s.rfind('\n'))
-        .map_or(0, |i| i + 1);
+/// The text of the line starting at byte `start`, without its newline.
+fn line_text_from(source: &str, start: usize) -> &str {
     let rest = source.get(start..).unwrap_or("");
     let line = rest.split('\n').next().unwrap_or("");
     line.strip_suffix('\r').unwrap_or(line)

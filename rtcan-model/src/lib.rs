@@ -20,6 +20,7 @@ pub mod filters;
 pub mod fingerprint;
 pub mod ids;
 pub mod model;
+pub mod names;
 pub mod plan;
 pub mod report;
 pub mod schedule;
@@ -43,15 +44,27 @@ pub enum Status {
     NotAdmissible,
     /// Invalid input.
     Invalid,
+    /// Valid input, but the admission search ran out of budget before deciding.
+    Undecided,
 }
 
 impl Status {
-    /// `rtcan check` exit code: 0, 1, 2.
+    /// `rtcan check` exit code: 0, 1, 2, 3 (docs/ROBOT_TOML.md).
     pub const fn exit_code(self) -> i32 {
         match self {
             Status::Admissible => 0,
             Status::NotAdmissible => 1,
             Status::Invalid => 2,
+            Status::Undecided => 3,
+        }
+    }
+    /// The `status` field of `rtcan check --json`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Status::Admissible => "admissible",
+            Status::NotAdmissible => "not-admissible",
+            Status::Invalid => "invalid",
+            Status::Undecided => "undecided",
         }
     }
 }
@@ -72,6 +85,8 @@ impl Analysis {
     pub fn status(&self) -> Status {
         if self.plan.is_some() && self.diagnostics.is_empty() {
             Status::Admissible
+        } else if self.model.is_some() && self.diagnostics.undecided() {
+            Status::Undecided
         } else if self.model.is_some() && self.diagnostics.only_schedule() {
             Status::NotAdmissible
         } else {
@@ -95,6 +110,12 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
                     line.trim().replace("`\"", "`").replace("\"`", "`"),
                 )
                 .help("every type, module, node and topic name must be unique"),
+                None if too_deep(&e.message, e.span.as_ref(), source) => Diagnostic::new(
+                    Code::TooDeep,
+                    e.span.clone(),
+                    format!("tables or arrays nested deeper than the TOML parser accepts ({})", e.first_line()),
+                )
+                .help("robot.toml needs at most 4 levels (e.g. `[topics.x]` with `subscribers = [{ node = \"n\" }]`)"),
                 None => Diagnostic::new(Code::TomlSyntax, e.span.clone(), e.first_line()),
             };
             items.push(d);
@@ -123,6 +144,89 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
     }
 }
 
+/// Largest robot description read (16 MiB; the Triskar2 robot is 5 KiB): `rtcan check
+/// /dev/zero` stops here instead of reading without limit.
+pub const MAX_SOURCE_BYTES: u64 = 16 * 1024 * 1024;
+
+/// Reads a robot description for diagnostics naming it `file`: at most
+/// [`MAX_SOURCE_BYTES`] (`file-too-large`), UTF-8 (`invalid-utf8` with the byte offset,
+/// line and column of the first bad byte), or `io`.
+pub fn read_source(path: &Path, file: &str) -> Result<String, Diagnostics> {
+    use std::io::Read as _;
+    let fail = |source: String, d: Diagnostic| Diagnostics {
+        file: file.to_string(),
+        source,
+        items: vec![d],
+    };
+    let mut bytes = Vec::new();
+    let read = std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SOURCE_BYTES + 1).read_to_end(&mut bytes));
+    if let Err(e) = read {
+        return Err(fail(
+            String::new(),
+            Diagnostic::new(Code::Io, None, format!("cannot read `{file}`: {e}")),
+        ));
+    }
+    if bytes.len() as u64 > MAX_SOURCE_BYTES {
+        return Err(fail(
+            String::new(),
+            Diagnostic::new(
+                Code::FileTooLarge,
+                None,
+                format!(
+                    "`{file}` is larger than {} MiB",
+                    MAX_SOURCE_BYTES / (1024 * 1024)
+                ),
+            )
+            .help("a robot description is a few KiB; is this the right file?"),
+        ));
+    }
+    match String::from_utf8(bytes) {
+        Ok(s) => Ok(s),
+        Err(e) => {
+            let at = e.utf8_error().valid_up_to();
+            // The text up to the bad byte is valid, so offsets agree with the lossy copy
+            // that is kept for the excerpt.
+            let source = String::from_utf8_lossy(e.as_bytes()).into_owned();
+            let (line, col) = diag::line_col(&source, at);
+            Err(fail(
+                source,
+                Diagnostic::new(
+                    Code::InvalidUtf8,
+                    Some(at..at + 1),
+                    format!("invalid UTF-8 at byte {at} (line {line}, column {col})"),
+                )
+                .help("robot.toml must be UTF-8 text"),
+            ))
+        }
+    }
+}
+
+/// Whether a TOML error comes from nesting: toml_edit says "recursion limit exceeded"
+/// for deep arrays and inline tables, but only "invalid table header" for a header with
+/// too many dotted keys (more than [`MAX_HEADER_KEYS`] on the error's line).
+fn too_deep(message: &str, span: Option<&Span>, source: &str) -> bool {
+    if message.contains("recursion limit") {
+        return true;
+    }
+    if !message.contains("invalid table header") {
+        return false;
+    }
+    let at = span.map_or(0, |s| s.start).min(source.len());
+    let start = source
+        .get(..at)
+        .and_then(|s| s.rfind('\n'))
+        .map_or(0, |i| i + 1);
+    let line = source
+        .get(start..)
+        .and_then(|s| s.lines().next())
+        .unwrap_or("");
+    line.matches('.').count() + 1 > MAX_HEADER_KEYS
+}
+
+/// Dotted keys in one table header beyond which a header error is reported as nesting.
+const MAX_HEADER_KEYS: usize = 64;
+
 /// Entry point for users of the model.
 pub struct Robot;
 
@@ -131,18 +235,7 @@ impl Robot {
     pub fn load(path: impl AsRef<Path>) -> Result<Plan, Diagnostics> {
         let path = path.as_ref();
         let file = path.display().to_string();
-        match std::fs::read_to_string(path) {
-            Ok(source) => Robot::parse(&file, &source),
-            Err(e) => Err(Diagnostics {
-                file: file.clone(),
-                source: String::new(),
-                items: vec![Diagnostic::new(
-                    Code::Io,
-                    None,
-                    format!("cannot read `{file}`: {e}"),
-                )],
-            }),
-        }
+        Robot::parse(&file, &read_source(path, &file)?)
     }
 
     /// Plans robot.toml text.

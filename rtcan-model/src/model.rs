@@ -39,6 +39,15 @@ impl Board {
     pub fn from_name(name: &str) -> Option<Board> {
         Board::ALL.into_iter().find(|b| b.name() == name)
     }
+    /// Clock of the CAN controller (APB1 on the F103: 36 MHz with the clock tree of
+    /// `boards/stm32f103`, `PCLK1_HZ`), from which the bit timing is derived; `None` for
+    /// the QEMU board, whose software CAN runs at any bit rate.
+    pub const fn can_clock_hz(self) -> Option<u32> {
+        match self {
+            Board::Stm32f103c8 | Board::Stm32f103rb | Board::Stm32f103re => Some(36_000_000),
+            Board::Qemu => None,
+        }
+    }
     /// CAN filter banks (the F103 without CAN2 has 14, whatever the HAL's `num_banks()` says).
     pub const fn filter_banks(self) -> u8 {
         14
@@ -271,6 +280,8 @@ pub struct Topic {
 pub struct BusSpans {
     /// `[bus]` itself.
     pub table: Option<Span>,
+    /// `bitrate` value.
+    pub bitrate: Option<Span>,
     /// `slots` value.
     pub slots: Option<Span>,
     /// `cycle` / `cycle_us` value.

@@ -290,6 +290,73 @@ pub fn counter_wrap(hyper_cycles: u32) -> u32 {
     ((1u32 << 15) / h).max(1) * h
 }
 
+/// Most message blocks of one topic on one module: `rtcan_pubsub::Topic` keeps its free
+/// blocks in one `u32` mask.
+pub const MAX_POOL_BLOCKS: usize = 32;
+
+/// Message blocks topic `t` needs on module `mi` (the formula of
+/// `rtcan_pubsub::pool_blocks` with one loan, as rtcan-codegen sizes the pool):
+/// local subscribers × (queue + 1) + what the engine side holds + 1 loan. The queue is
+/// the topic's longest subscriber queue (`rtcan_pubsub::Topic` has one queue length).
+pub fn pool_blocks(t: &TopicPlan, mi: usize) -> usize {
+    let subs = t.subscribers.iter().filter(|s| s.module == mi).count();
+    let queue = usize::from(
+        t.subscribers
+            .iter()
+            .map(|s| s.queue)
+            .max()
+            .unwrap_or(1)
+            .max(1),
+    );
+    let remote = match (t.module == mi && t.on_bus, t.class) {
+        (false, _) => 0,
+        (true, Class::Hrt) => 2,
+        (true, _) => queue + 1,
+    };
+    subs * queue + subs + remote + 1
+}
+
+/// `pool-too-large` for every topic whose pool on some module exceeds
+/// [`MAX_POOL_BLOCKS`]: found here, so `rtcan check` refuses what would not build.
+fn pool_limits(model: &Model, topics: &[TopicPlan], diags: &mut Vec<Diagnostic>) {
+    for (i, t) in topics.iter().enumerate() {
+        let mut modules: Vec<usize> = t.subscribers.iter().map(|s| s.module).collect();
+        modules.push(t.module);
+        modules.sort_unstable();
+        modules.dedup();
+        for mi in modules {
+            let n = pool_blocks(t, mi);
+            if n <= MAX_POOL_BLOCKS {
+                continue;
+            }
+            let subs = t.subscribers.iter().filter(|s| s.module == mi).count();
+            let queue = t
+                .subscribers
+                .iter()
+                .map(|s| s.queue)
+                .max()
+                .unwrap_or(1)
+                .max(1);
+            diags.push(
+                Diagnostic::new(
+                    Code::PoolTooLarge,
+                    model.topics.get(i).and_then(|x| x.spans.name.clone()),
+                    format!(
+                        "topic `{}` needs {n} message blocks on module `{}`; a topic has at most {MAX_POOL_BLOCKS}",
+                        t.name,
+                        model.modules.get(mi).map_or("?", |m| m.name.as_str())
+                    ),
+                )
+                .help("shorten its subscriber queues")
+                .note(format!(
+                    "{subs} local subscriber(s) with queues of {queue} (each holds its queue plus the message it reads), {} for the bus, 1 loan",
+                    n - subs * (usize::from(queue) + 1) - 1
+                )),
+            );
+        }
+    }
+}
+
 /// Plans a validated model. Errors (schedule, filters, table sizes) are pushed to `diags`;
 /// a plan is returned only when there are none.
 pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<Plan> {
@@ -333,6 +400,8 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
             rate_hz: t.rate_hz,
         });
     }
+
+    pool_limits(model, &topics, diags);
 
     // HRT admission over the topics on the bus, in message-ID order so that the phases
     // do not depend on the order of sections in the file.
@@ -404,9 +473,10 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
             .map(|(i, _)| i)
             .collect();
         rx.sort_by_key(|i| topics.get(*i).map(|t| t.msg_id));
+        let rx_set: std::collections::HashSet<usize> = rx.iter().copied().collect();
         let wanted: Vec<WireTopic> = wire
             .iter()
-            .filter(|w| rx.contains(&w.topic))
+            .filter(|w| rx_set.contains(&w.topic))
             .copied()
             .collect();
         let banks = match m.filters {

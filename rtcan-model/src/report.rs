@@ -20,6 +20,14 @@ fn node_name(plan: &Plan, n: usize) -> &str {
     plan.nodes.get(n).map_or("?", |x| x.name.as_str())
 }
 
+/// `text` left-aligned in `width` characters. Written by hand: `format!("{:<w$}")`
+/// panics for widths above `u16::MAX` (a 64 KiB name).
+fn pad_to(out: &mut String, text: &str, width: usize) {
+    out.push_str(text);
+    let n = text.chars().count();
+    out.extend(std::iter::repeat_n(' ', width.saturating_sub(n)));
+}
+
 /// Pads every column of `rows` to its widest cell.
 fn table(rows: &[Vec<String>]) -> String {
     let cols = rows.iter().map(Vec::len).max().unwrap_or(0);
@@ -37,7 +45,8 @@ fn table(rows: &[Vec<String>]) -> String {
         let mut line = String::from("  ");
         for (c, cell) in r.iter().enumerate() {
             let w = widths.get(c).copied().unwrap_or(0);
-            let _ = write!(line, "{cell:<w$}  ");
+            pad_to(&mut line, cell, w);
+            line.push_str("  ");
         }
         out.push_str(line.trim_end());
         out.push('\n');
@@ -257,6 +266,12 @@ fn bank_text(plan: &Plan, f: &FilterBank, p: &BankPurpose) -> String {
     }
 }
 
+fn padded(text: &str, width: usize) -> String {
+    let mut s = String::new();
+    pad_to(&mut s, text, width);
+    s
+}
+
 /// The cycle calendar, one block per cycle of the hyperperiod, one row per module (like
 /// the RTCAN paper's Fig. 3), then the reservation mask the master sends.
 pub fn calendar(plan: &Plan) -> String {
@@ -289,8 +304,8 @@ pub fn calendar(plan: &Plan) -> String {
     }
     for c in 0..b.hyperperiod_cycles as usize {
         let _ = writeln!(o, "cycle {c}");
-        let _ = writeln!(o, "  {:width$}{tens}", "slot");
-        let _ = writeln!(o, "  {:width$}{ones}", "");
+        let _ = writeln!(o, "  {}{tens}", padded("slot", width));
+        let _ = writeln!(o, "  {}{ones}", padded("", width));
         for m in &plan.modules {
             let mut row: Vec<char> = vec!['.'; n];
             if m.is_master {
@@ -311,7 +326,12 @@ pub fn calendar(plan: &Plan) -> String {
             if m.calendar.is_empty() && !m.is_master {
                 continue;
             }
-            let _ = writeln!(o, "  {:width$}{}", m.name, row.iter().collect::<String>());
+            let _ = writeln!(
+                o,
+                "  {}{}",
+                padded(&m.name, width),
+                row.iter().collect::<String>()
+            );
         }
         let mask = plan.master_masks.get(c).copied().unwrap_or(1);
         let bits: String = (0..n)
@@ -319,8 +339,8 @@ pub fn calendar(plan: &Plan) -> String {
             .collect();
         let _ = writeln!(
             o,
-            "  {:width$}{bits}   {}/{} reserved",
-            "mask",
+            "  {}{bits}   {}/{} reserved",
+            padded("mask", width),
             mask.count_ones(),
             n
         );
@@ -340,7 +360,7 @@ pub fn calendar(plan: &Plan) -> String {
                     )
                 })
                 .collect();
-        let _ = writeln!(o, "  {:width$}{}", m.name, items.join(" "));
+        let _ = writeln!(o, "  {}{}", padded(&m.name, width), items.join(" "));
     }
     o
 }
@@ -379,17 +399,18 @@ fn topic_json(plan: &Plan, t: &TopicPlan) -> Value {
 
 /// Diagnostics as JSON objects (`code`, `category`, `message`, `line`, `column`, `span`, `help`, `notes`).
 pub fn diagnostics_json(d: &Diagnostics) -> Value {
+    let index = d.index();
     Value::Array(
         d.items
             .iter()
             .map(|x| {
                 let (line, col) = x.span.as_ref().map_or((None, None), |s| {
-                    let (l, c) = d.line_col(s.start);
+                    let (l, c) = index.line_col(&d.source, s.start);
                     (Some(l), Some(c))
                 });
                 json!({
                     "code": x.code.name(),
-                    "category": match x.code.category() { crate::Category::Input => "input", crate::Category::Schedule => "schedule" },
+                    "category": match x.code.category() { crate::Category::Input => "input", crate::Category::Schedule => "schedule", crate::Category::Undecided => "undecided" },
                     "message": x.message,
                     "file": d.file,
                     "line": line,
@@ -406,11 +427,7 @@ pub fn diagnostics_json(d: &Diagnostics) -> Value {
 /// The documented JSON of a check (docs/ROBOT_TOML.md, "rtcan check --json").
 pub fn json(a: &Analysis) -> Value {
     let status = a.status();
-    let status_name = match status {
-        Status::Admissible => "admissible",
-        Status::NotAdmissible => "not-admissible",
-        Status::Invalid => "invalid",
-    };
+    let status_name = status.name();
     let mut v = json!({
         "file": a.diagnostics.file,
         "admissible": status == Status::Admissible,

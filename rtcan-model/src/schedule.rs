@@ -181,7 +181,13 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
                     )
                 })
                 .collect();
-            uses.truncate(8);
+            // Eight are enough to see the pattern; the count says the list is cut.
+            let listed = 8;
+            let more = uses.len().saturating_sub(listed);
+            uses.truncate(listed);
+            if more > 0 {
+                uses.push(format!("and {more} more"));
+            }
             Diagnostic::new(
                 Code::HrtOverCapacity,
                 span_of(culprit),
@@ -192,13 +198,34 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
             .help(suggestion(model, hrt, culprit))
             .note(format!("slots per period: {}", uses.join(", ")))
         }
-        AdmissionError::Infeasible { conflict, len } => {
+        AdmissionError::Infeasible {
+            conflict,
+            len,
+            size,
+        } => {
             let idx: Vec<usize> = conflict
                 .iter()
                 .take(usize::from(len).min(MAX_CONFLICT))
                 .map(|c| usize::from(*c))
                 .collect();
-            let culprit = idx.last().copied().unwrap_or(0);
+            // A pair: the later one. A capacity core: its most demanding topic (the one
+            // whose period is worth changing).
+            let demand = |i: usize| {
+                hrt.get(i).map_or(0.0, |h| {
+                    f64::from(h.request.fragments) / f64::from(h.request.period_slots.max(1))
+                })
+            };
+            let culprit = if usize::from(size) > idx.len() {
+                idx.iter()
+                    .copied()
+                    .fold(None::<usize>, |best, i| match best {
+                        Some(b) if demand(b) >= demand(i) => Some(b),
+                        _ => Some(i),
+                    })
+                    .unwrap_or(0)
+            } else {
+                idx.last().copied().unwrap_or(0)
+            };
             let others: Vec<String> = idx
                 .iter()
                 .filter(|i| **i != culprit)
@@ -214,15 +241,20 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
                 .iter()
                 .filter_map(|i| hrt.get(*i).map(|h| h.request))
                 .collect();
-            let why = if admission::paper_rule(&subset).is_err() {
-                "periods relatively prime"
+            let shown = idx.len();
+            let size = usize::from(size).max(shown);
+            let (with, why) = if size > shown {
+                // A capacity argument over many topics: name a few, count the rest.
+                (
+                    format!("{} and {} more HRT topics", others.join(", "), size - shown),
+                    "together they need more slots than the phases their periods leave free",
+                )
+            } else if others.is_empty() {
+                ("the sync slot".to_string(), "every phase collides")
+            } else if admission::paper_rule(&subset).is_err() {
+                (others.join(", "), "periods relatively prime")
             } else {
-                "every phase collides"
-            };
-            let with = if others.is_empty() {
-                "the sync slot".to_string()
-            } else {
-                others.join(", ")
+                (others.join(", "), "every phase collides")
             };
             Diagnostic::new(
                 Code::InadmissibleHrt,
@@ -235,11 +267,44 @@ fn diagnose(model: &Model, hrt: &[HrtTopic], e: AdmissionError) -> Diagnostic {
             )
             .help(suggestion(model, hrt, culprit))
         }
-        AdmissionError::TooHard { steps } => Diagnostic::new(
-            Code::AdmissionTooHard,
-            model.bus.spans.table.clone(),
-            format!("HRT admission gave up after {steps} search steps"),
-        )
-        .help("use harmonic periods (each dividing the next) to make the search easy"),
+        AdmissionError::TooHard { steps, stuck, len } => {
+            let idx: Vec<usize> = stuck
+                .iter()
+                .take(usize::from(len).min(MAX_CONFLICT))
+                .map(|c| usize::from(*c))
+                .collect();
+            let culprit = idx.first().copied();
+            let named: Vec<String> = idx
+                .iter()
+                .map(|i| {
+                    format!(
+                        "`{}` (period {})",
+                        name_of(*i),
+                        fmt_period(model, period_of(*i))
+                    )
+                })
+                .collect();
+            let mut d = Diagnostic::new(
+                Code::AdmissionUndecided,
+                culprit
+                    .and_then(span_of)
+                    .or_else(|| model.bus.spans.table.clone()),
+                format!(
+                    "HRT admission is undecided: no placement and no proof that none exists after {steps} search steps"
+                ),
+            )
+            .help("use harmonic periods (each dividing the next) to make the search easy");
+            if let Some((first, rest)) = named.split_first() {
+                d = d.note(if rest.is_empty() {
+                    format!("the search was placing {first} when it stopped")
+                } else {
+                    format!(
+                        "the search was placing {first} when it stopped; its phases collided with {}",
+                        rest.join(", ")
+                    )
+                });
+            }
+            d.note("an undecided robot is refused like an inadmissible one (`rtcan check` exits 3)")
+        }
     }
 }

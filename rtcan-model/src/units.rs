@@ -73,7 +73,13 @@ pub fn bitrate(text: &str) -> Result<u64, String> {
         "Mbit/s" | "Mbps" | "M" => 1e6,
         _ => return Err(bad()),
     };
-    Ok((v * scale).round() as u64)
+    let bps = v * scale;
+    if !bps.is_finite() || bps < 0.0 {
+        return Err(format!(
+            "`{text}` is negative or not finite: classic CAN runs at 10 kbit/s to 1 Mbit/s"
+        ));
+    }
+    Ok(bps.round().min(u64::MAX as f64) as u64)
 }
 
 /// A percentage as a fraction: "2%" → 0.02.

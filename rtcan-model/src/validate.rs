@@ -5,8 +5,10 @@ use crate::model::{
     Board, Bus, BusSpans, Field, FieldType, FilterMode, Model, Module, MsgType, Node, Prim,
     Subscriber, Topic, TopicSpans,
 };
+use crate::names;
 use crate::syntax::{self, Entry, Kind};
 use crate::units;
+use rtcan_core::bit_timing::{BitTiming, BitTimingError};
 use rtcan_core::fragment::{fragment_count, wire_len, MAX_PAYLOAD};
 use rtcan_core::laxity::LaxityEncoding;
 use rtcan_core::timing::{bits_to_ns, worst_case_bits};
@@ -44,16 +46,44 @@ const SUB_KEYS: &[&str] = &["node", "queue"];
 pub const MAX_MODULES: usize = 64;
 /// Highest node priority (Cortex-M3 NVIC as used by RTIC on the F103: 4 bits).
 pub const MAX_PRIORITY: i64 = 15;
-/// Rust keywords that cannot be field, module, node or topic names.
-const KEYWORDS: &[&str] = &[
-    "as", "async", "await", "break", "const", "continue", "crate", "dyn", "else", "enum", "extern",
-    "false", "fn", "for", "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub",
-    "ref", "return", "self", "static", "struct", "super", "trait", "true", "type", "unsafe", "use",
-    "where", "while", "yield", "box", "try",
-];
 
 struct V<'d> {
     diags: &'d mut Vec<Diagnostic>,
+    /// "Did you mean" suggestions computed so far: each costs a scan of the declared
+    /// names, so only the first [`MAX_SUGGESTIONS`] unknown references get one.
+    suggestions: usize,
+}
+
+/// Unknown references that get a "did you mean" (8 000 misspellings against 8 000 names
+/// must not cost 64 M edit distances).
+const MAX_SUGGESTIONS: usize = 50;
+/// Longest word an edit distance is computed for (the distance is quadratic in length).
+const MAX_SUGGEST_LEN: usize = 64;
+/// Names listed when no suggestion is close.
+const MAX_LISTED: usize = 12;
+
+/// Declared names of one kind, in file order, with a hash index (a name lookup per
+/// reference must not scan 64 000 topics).
+struct Names<'a> {
+    list: Vec<&'a str>,
+    index: std::collections::HashMap<&'a str, usize>,
+}
+
+impl<'a> Names<'a> {
+    fn new(entries: &'a [Entry]) -> Self {
+        let list: Vec<&str> = entries.iter().map(|e| e.key.as_str()).collect();
+        let mut index = std::collections::HashMap::with_capacity(list.len());
+        for (i, n) in list.iter().enumerate() {
+            index.entry(*n).or_insert(i);
+        }
+        Names { list, index }
+    }
+    fn find(&self, name: &str) -> Option<usize> {
+        self.index.get(name).copied()
+    }
+    fn get(&self, i: usize) -> &'a str {
+        self.list.get(i).copied().unwrap_or("")
+    }
 }
 
 fn get<'n>(entries: &'n [Entry], key: &str) -> Option<&'n Entry> {
@@ -82,22 +112,41 @@ fn distance(a: &str, b: &str) -> usize {
     row.last().copied().unwrap_or(0)
 }
 
-/// The closest candidate within a small edit distance.
+/// The closest candidate within a small edit distance (`max(2, len / 3)`); candidates
+/// whose length alone puts them further away are skipped without computing a distance.
 pub fn suggest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    if word.len() > MAX_SUGGEST_LEN {
+        return None;
+    }
     candidates
         .into_iter()
+        .filter(|c| c.len().abs_diff(word.len()) <= 2.max(c.len() / 3))
         .map(|c| (distance(word, c), c))
         .filter(|(d, c)| *d <= 2.max(c.len() / 3))
         .min_by_key(|(d, _)| *d)
         .map(|(_, c)| c)
 }
 
+/// `a`, `b`, `c` (the first [`MAX_LISTED`], then "and N more").
+/// A name for a message: the first 64 characters of a long one.
+fn clip_name(name: &str) -> String {
+    match name.char_indices().nth(64) {
+        Some((i, _)) => format!("{}... ({} bytes)", name.get(..i).unwrap_or(""), name.len()),
+        None => name.to_string(),
+    }
+}
+
 fn list(names: &[&str]) -> String {
-    names
+    let mut out = names
         .iter()
+        .take(MAX_LISTED)
         .map(|n| format!("`{n}`"))
         .collect::<Vec<_>>()
-        .join(", ")
+        .join(", ");
+    if names.len() > MAX_LISTED {
+        out.push_str(&format!(" and {} more", names.len() - MAX_LISTED));
+    }
+    out
 }
 
 impl V<'_> {
@@ -196,38 +245,60 @@ impl V<'_> {
     fn name(&mut self, e: &Entry, what: &str, camel: bool) -> bool {
         let n = &e.key;
         let mut chars = n.chars();
-        let ok = if camel {
+        let form_ok = if camel {
             chars.next().is_some_and(|c| c.is_ascii_uppercase())
                 && chars.all(|c| c.is_ascii_alphanumeric())
         } else {
             chars.next().is_some_and(|c| c.is_ascii_lowercase())
                 && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
-                && !KEYWORDS.contains(&n.as_str())
         };
-        if !ok {
-            let form = if camel {
-                "CamelCase, e.g. `WheelSpeeds`"
+        let form = if camel {
+            "CamelCase, e.g. `WheelSpeeds`"
+        } else {
+            "snake_case, e.g. `wheel_speeds`"
+        };
+        if !form_ok {
+            self.push(
+                Diagnostic::new(
+                    Code::BadName,
+                    e.key_span.clone(),
+                    format!("{what} name `{}` is not a valid name", clip_name(n)),
+                )
+                .help(format!(
+                    "{what} names are {form}, not a Rust keyword; they become Rust identifiers"
+                )),
+            );
+            return false;
+        }
+        if names::is_keyword(n) {
+            let raw = if names::NOT_RAW.contains(&n.as_str()) {
+                "it cannot be an identifier at all, not even `r#"
             } else {
-                "snake_case, not a Rust keyword"
+                "it would need the raw identifier `r#"
+            };
+            let end = if names::NOT_RAW.contains(&n.as_str()) {
+                "`"
+            } else {
+                "` at every use"
             };
             self.push(
                 Diagnostic::new(
                     Code::BadName,
                     e.key_span.clone(),
-                    format!("{what} name `{n}` is not a valid name"),
+                    format!("{what} name `{n}` is a Rust keyword"),
                 )
-                .help(format!(
-                    "{what} names are {form}; they become Rust identifiers"
-                )),
+                .help(format!("{what} names become Rust identifiers; {raw}{n}{end}: rename it, e.g. `{}`", if camel { format!("{n}Msg") } else { format!("{n}_") }))
+                .note("every strict, reserved and weak keyword of editions 2015 to 2024 is refused (docs/ROBOT_TOML.md, \"Names\")"),
             );
+            return false;
         }
-        ok
+        true
     }
 
     /// Resolves a name reference, or reports `code` with a did-you-mean.
-    fn resolve(&mut self, e: &Entry, what: &str, names: &[&str], code: Code) -> Option<usize> {
+    fn resolve(&mut self, e: &Entry, what: &str, names: &Names<'_>, code: Code) -> Option<usize> {
         let s = self.string(e, what)?;
-        if let Some(i) = names.iter().position(|n| *n == s) {
+        if let Some(i) = names.find(s) {
             return Some(i);
         }
         let kind = match code {
@@ -240,10 +311,16 @@ impl V<'_> {
             e.value.span.clone(),
             format!("unknown {kind} `{s}` in {what}"),
         );
-        d = match suggest(s, names.iter().copied()) {
+        let suggestion = if self.suggestions < MAX_SUGGESTIONS {
+            self.suggestions += 1;
+            suggest(s, names.list.iter().copied())
+        } else {
+            None
+        };
+        d = match suggestion {
             Some(c) => d.help(format!("did you mean `{c}`?")),
-            None if names.is_empty() => d.help(format!("no {kind} is declared")),
-            None => d.help(format!("declared {kind}s: {}", list(names))),
+            None if names.list.is_empty() => d.help(format!("no {kind} is declared")),
+            None => d.help(format!("declared {kind}s: {}", list(&names.list))),
         };
         self.push(d);
         None
@@ -274,7 +351,10 @@ pub fn message_ns(size: usize, bitrate: u32) -> u64 {
 /// (schedule errors found here, like an unrepresentable period, still give a model).
 pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Model> {
     let start = diags.len();
-    let mut v = V { diags };
+    let mut v = V {
+        diags,
+        suggestions: 0,
+    };
     let Kind::Table(root) = &root.kind else {
         return None;
     };
@@ -284,9 +364,9 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
     let module_entries = section(&mut v, root, "modules");
     let node_entries = section(&mut v, root, "nodes");
     let topic_entries = section(&mut v, root, "topics");
-    let type_names: Vec<&str> = type_entries.iter().map(|e| e.key.as_str()).collect();
-    let module_names: Vec<&str> = module_entries.iter().map(|e| e.key.as_str()).collect();
-    let node_names: Vec<&str> = node_entries.iter().map(|e| e.key.as_str()).collect();
+    let type_names = Names::new(type_entries);
+    let module_names = Names::new(module_entries);
+    let node_names = Names::new(node_entries);
 
     let types: Vec<MsgType> = type_entries.iter().map(|e| msg_type(&mut v, e)).collect();
     let modules: Vec<Module> = module_entries.iter().map(|e| module(&mut v, e)).collect();
@@ -316,6 +396,10 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
             topics.push(t);
         }
     }
+    generated_name_clashes(&mut v, module_entries, topic_entries);
+    if let Some(b) = &bus {
+        bit_timing(&mut v, b, &modules);
+    }
     let bus = bus?;
     let failed = diags.get(start..).is_some_and(|new| {
         new.iter()
@@ -333,6 +417,107 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
     })
 }
 
+/// The bit rate must be reachable exactly from every board's CAN clock, by the same
+/// computation the firmware's `can_btr!` runs at compile time (rtcan_core::bit_timing).
+fn bit_timing(v: &mut V<'_>, bus: &Bus, modules: &[Module]) {
+    for board in Board::ALL {
+        let Some(clock) = board.can_clock_hz() else {
+            continue;
+        };
+        let users: Vec<&str> = modules
+            .iter()
+            .filter(|m| m.board == board)
+            .map(|m| m.name.as_str())
+            .collect();
+        if users.is_empty() {
+            continue;
+        }
+        let why = match BitTiming::compute(clock, bus.bitrate) {
+            Ok(_) => continue,
+            Err(BitTimingError::OutOfRange) => "above an eighth of the clock".to_string(),
+            Err(BitTimingError::NoExactPrescaler) => format!(
+                "no prescaler 1..=1024 divides {} MHz into 8..=25 time quanta per bit",
+                units::trim_float(f64::from(clock) / 1e6)
+            ),
+        };
+        let near: Vec<String> = COMMON_BITRATES
+            .iter()
+            .filter(|r| BitTiming::compute(clock, **r).is_ok())
+            .map(|r| units::trim_float(f64::from(*r) / 1e3) + " kbit/s")
+            .collect();
+        v.push(
+            Diagnostic::new(
+                Code::BitrateUnreachable,
+                bus.spans
+                    .bitrate
+                    .clone()
+                    .or_else(|| bus.spans.table.clone()),
+                format!(
+                    "bit rate {} bit/s is not reachable on board {} (CAN clock {} MHz): {why}",
+                    bus.bitrate,
+                    board.name(),
+                    units::trim_float(f64::from(clock) / 1e6)
+                ),
+            )
+            .help(format!(
+                "bit rates this board reaches exactly: {}",
+                near.join(", ")
+            ))
+            .note(format!("modules on this board: {}", list(&users))),
+        );
+    }
+}
+
+/// Bit rates offered in the hint of `bitrate-unreachable`.
+const COMMON_BITRATES: &[u32] = &[
+    1_000_000, 800_000, 500_000, 250_000, 125_000, 100_000, 50_000, 20_000, 10_000,
+];
+
+/// Names that are valid alone but collide in the generated code: a module named like a
+/// generated item or a primitive type, and topics whose `<Camel>Topic` aliases are equal.
+fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
+    for m in modules {
+        if names::RESERVED_MODULE_NAMES.contains(&m.key.as_str()) {
+            let what = match m.key.as_str() {
+                "topics" => "the generated module holding the topic constants",
+                "rtcan" => "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
+                _ => "a primitive type the generated message structs use",
+            };
+            v.push(
+                Diagnostic::new(
+                    Code::NameCollision,
+                    m.key_span.clone(),
+                    format!("module name `{}` collides with {what}", m.key),
+                )
+                .help(format!("rename the module, e.g. `{}_module`", m.key)),
+            );
+        }
+    }
+    let mut aliases: std::collections::HashMap<String, &str> =
+        std::collections::HashMap::with_capacity(topics.len());
+    for t in topics {
+        let alias = names::topic_alias(&t.key);
+        match aliases.get(&alias) {
+            Some(first) => v.push(
+                Diagnostic::new(
+                    Code::NameCollision,
+                    t.key_span.clone(),
+                    format!(
+                        "topics `{}` and `{}` both become the Rust type `{}`",
+                        clip_name(first),
+                        clip_name(&t.key),
+                        clip_name(&alias)
+                    ),
+                )
+                .help("names that differ only in underscores collide after conversion to CamelCase: rename one"),
+            ),
+            None => {
+                aliases.insert(alias, &t.key);
+            }
+        }
+    }
+}
+
 fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
     v.name(e, "type", true);
     let mut fields = Vec::new();
@@ -342,18 +527,26 @@ fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
         let Some(text) = v.string(f, &format!("field `{}.{}`", e.key, f.key)) else {
             continue;
         };
-        match field_type(text) {
-            Some(ty) => {
+        match parse_field_type(text) {
+            Ok(ty) => {
                 fields.push(Field { name: f.key.clone(), ty, offset });
                 offset += ty.size();
             }
-            None => v.push(
+            Err(FieldTypeError::Unknown) => v.push(
                 Diagnostic::new(
                     Code::UnknownType,
                     f.value.span.clone(),
                     format!("unknown field type `{text}` for `{}.{}`", e.key, f.key),
                 )
-                .help("field types are u8, u16, u32, u64, i8, i16, i32, i64, f32, f64, bool, or an array `[T; N]` of one"),
+                .help(format!("field types are u8, u16, u32, u64, i8, i16, i32, i64, f32, f64, bool, or an array `[T; N]` of one with N in 1..={MAX_PAYLOAD}")),
+            ),
+            Err(FieldTypeError::Length(n)) => v.push(
+                Diagnostic::new(
+                    Code::BadValue,
+                    f.value.span.clone(),
+                    format!("array length {n} of field `{}.{}` is out of range 1..={MAX_PAYLOAD}", e.key, f.key),
+                )
+                .help(format!("a message carries at most {MAX_PAYLOAD} bytes; an array has 1 to {MAX_PAYLOAD} elements")),
             ),
         }
     }
@@ -380,16 +573,38 @@ fn msg_type(v: &mut V<'_>, e: &Entry) -> MsgType {
 
 /// `f32` or `[i16; 3]` (1 <= N <= MAX_PAYLOAD).
 pub fn field_type(text: &str) -> Option<FieldType> {
+    parse_field_type(text).ok()
+}
+
+/// Why a field type does not parse.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FieldTypeError {
+    /// Not a primitive or `[primitive; N]`.
+    Unknown,
+    /// `[T; N]` with N, as written, outside 1..=MAX_PAYLOAD.
+    Length(String),
+}
+
+/// [`field_type`], telling an unknown type from an array length out of range.
+pub fn parse_field_type(text: &str) -> Result<FieldType, FieldTypeError> {
     let t = text.trim();
     if let Some(inner) = t.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
-        let (p, n) = inner.split_once(';')?;
-        let prim = Prim::from_name(p.trim())?;
-        let n: u16 = n.trim().parse().ok()?;
-        (1..=MAX_PAYLOAD as u16)
-            .contains(&n)
-            .then_some(FieldType { prim, len: Some(n) })
+        let (p, n) = inner.split_once(';').ok_or(FieldTypeError::Unknown)?;
+        let prim = Prim::from_name(p.trim()).ok_or(FieldTypeError::Unknown)?;
+        let written = n.trim();
+        // Any integer literal is a length (out of range or not); anything else is not a type.
+        let digits = written.strip_prefix('-').unwrap_or(written);
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit() || b == b'_') {
+            return Err(FieldTypeError::Unknown);
+        }
+        match written.replace('_', "").parse::<u16>() {
+            Ok(n) if (1..=MAX_PAYLOAD as u16).contains(&n) => Ok(FieldType { prim, len: Some(n) }),
+            _ => Err(FieldTypeError::Length(written.to_string())),
+        }
     } else {
-        Prim::from_name(t).map(|prim| FieldType { prim, len: None })
+        Prim::from_name(t)
+            .map(|prim| FieldType { prim, len: None })
+            .ok_or(FieldTypeError::Unknown)
     }
 }
 
@@ -455,7 +670,7 @@ fn board_list() -> String {
     list(&names)
 }
 
-fn node(v: &mut V<'_>, e: &Entry, modules: &[&str]) -> Node {
+fn node(v: &mut V<'_>, e: &Entry, modules: &Names<'_>) -> Node {
     v.name(e, "node", false);
     let mut n = Node {
         name: e.key.clone(),
@@ -487,7 +702,7 @@ fn node(v: &mut V<'_>, e: &Entry, modules: &[&str]) -> Node {
     n
 }
 
-fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
+fn bus(v: &mut V<'_>, root: &[Entry], modules: &Names<'_>) -> Option<Bus> {
     let Some(be) = get(root, "bus") else {
         v.push(
             Diagnostic::new(
@@ -509,20 +724,28 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
 
     let mut bitrate = 1_000_000u64;
     if let Some(e) = get(t, "bitrate") {
+        spans.bitrate = e.value.span.clone();
+        // The value as written goes into the message (`-1000000`, not a clamped 0).
         let parsed = match &e.value.kind {
-            Kind::Int(i) => Some(u64::try_from(*i).unwrap_or(0)),
-            _ => v.parsed(e, "`bitrate`", units::bitrate),
+            Kind::Int(i) => Some((i128::from(*i), i.to_string())),
+            Kind::Str(text) => v
+                .parsed(e, "`bitrate`", units::bitrate)
+                .map(|b| (i128::from(b), format!("\"{text}\" ({b} bit/s)"))),
+            _ => v
+                .parsed(e, "`bitrate`", units::bitrate)
+                .map(|b| (i128::from(b), b.to_string())),
         };
         match parsed {
-            Some(b) if (10_000..=1_000_000).contains(&b) => bitrate = b,
-            Some(b) => {
+            Some((b, _)) if (10_000..=1_000_000).contains(&b) => bitrate = b as u64,
+            Some((b, written)) => {
+                let why = if b < 0 { "negative" } else { "out of range" };
                 v.push(
                     Diagnostic::new(
                         Code::BadValue,
                         e.value.span.clone(),
-                        format!("bit rate {b} bit/s is out of range"),
+                        format!("bit rate {written} is {why}"),
                     )
-                    .help("classic CAN runs at 10 kbit/s to 1 Mbit/s"),
+                    .help("classic CAN runs at 10 kbit/s to 1 Mbit/s: write e.g. \"500kbit/s\" or 1000000"),
                 );
                 ok = false;
             }
@@ -696,7 +919,7 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
                                 item.span.clone(),
                                 format!(
                                     "module `{}` is already a master or backup master",
-                                    modules.get(i).unwrap_or(&"")
+                                    modules.get(i)
                                 ),
                             ));
                         } else {
@@ -734,8 +957,8 @@ fn bus(v: &mut V<'_>, root: &[Entry], modules: &[&str]) -> Option<Bus> {
 fn topic(
     v: &mut V<'_>,
     e: &Entry,
-    type_names: &[&str],
-    node_names: &[&str],
+    type_names: &Names<'_>,
+    node_names: &Names<'_>,
     types: &[MsgType],
     bus: Option<&Bus>,
 ) -> Option<Topic> {
@@ -935,7 +1158,7 @@ fn subscribers(
     v: &mut V<'_>,
     e: &Entry,
     t: &[Entry],
-    node_names: &[&str],
+    node_names: &Names<'_>,
     default_queue: u16,
 ) -> Option<Vec<Subscriber>> {
     let Some(s) = get(t, "subscribers") else {
@@ -956,6 +1179,7 @@ fn subscribers(
         return None;
     };
     let mut out: Vec<Subscriber> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     let mut ok = true;
     for item in items {
         let (node_entry, queue) = match &item.kind {
@@ -1015,13 +1239,13 @@ fn subscribers(
             ok = false;
             continue;
         };
-        if out.iter().any(|s| s.node == node) {
+        if !seen.insert(node) {
             v.push(Diagnostic::new(
                 Code::DuplicateName,
                 node_entry.value.span.clone(),
                 format!(
                     "node `{}` subscribes to topic `{}` twice",
-                    node_names.get(node).unwrap_or(&""),
+                    node_names.get(node),
                     e.key
                 ),
             ));

@@ -45,6 +45,17 @@ const CASES: &[(&str, &[Code], Status)] = &[
     ("wrong-type", &[Code::WrongType], Status::Invalid),
     ("missing-key", &[Code::MissingKey], Status::Invalid),
     ("bad-name", &[Code::BadName], Status::Invalid),
+    (
+        "keyword-name",
+        &[Code::BadName, Code::BadName, Code::BadName],
+        Status::Invalid,
+    ),
+    ("name-collision", &[Code::NameCollision], Status::Invalid),
+    (
+        "bitrate-unreachable",
+        &[Code::BitrateUnreachable],
+        Status::Invalid,
+    ),
     ("unknown-board", &[Code::UnknownBoard], Status::Invalid),
     ("class-mismatch", &[Code::ClassMismatch], Status::Invalid),
     ("queue-zero", &[Code::QueueZero], Status::Invalid),
