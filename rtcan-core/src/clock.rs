@@ -446,8 +446,10 @@ mod tests {
                     let exact = (i128::from(err) << Q) / i128::from(d_bus);
                     let got = i128::from(clk.measure(err, n, d_bus));
                     // Units of 2^-40 (10⁻¹²): a few are far below a ppb; the division
-                    // fallback (errors of 2^31 ns and more) keeps 30 significant bits.
-                    let tol = (exact.abs() >> 30).max(8);
+                    // fallback (errors of 2^31 ns and more) resolves 2^(40 - s) units,
+                    // s = the numerator's headroom (`rate_q40_of`).
+                    let s = (err.unsigned_abs().leading_zeros().saturating_sub(2)).min(Q);
+                    let tol = (1i128 << (Q - s)).max(8);
                     assert!((got - exact).abs() <= tol, "{slot_ns} {n} {err}: {got} vs {exact}");
                 }
             }
