@@ -185,7 +185,11 @@ impl SlotClock {
         // e < 2^31 and recip <= 2^32: the product fits.
         let sh = self.recip_sh - Q;
         let per_cycle = (e * self.recip + ((1 << sh) >> 1)) >> sh;
-        let q = if n == 1 { per_cycle } else { div_by_u16(per_cycle, n as u32) };
+        let q = if n == 1 {
+            per_cycle
+        } else {
+            div_by_u16(per_cycle, n as u32)
+        };
         let q = i64::try_from(q).unwrap_or(i64::MAX);
         if err < 0 {
             -q
@@ -442,7 +446,15 @@ mod tests {
             assert_eq!(clk.recip == 0, cyc >= 1 << 32, "{slot_ns}");
             for n in [1i64, 2, 3, 255, 65_535, 65_536, 100_000] {
                 let d_bus = n * cyc;
-                for err in [0, 1, -1, 12_345, -(d_bus / 100), d_bus / 100, d_bus / 1_000_000] {
+                for err in [
+                    0,
+                    1,
+                    -1,
+                    12_345,
+                    -(d_bus / 100),
+                    d_bus / 100,
+                    d_bus / 1_000_000,
+                ] {
                     let exact = (i128::from(err) << Q) / i128::from(d_bus);
                     let got = i128::from(clk.measure(err, n, d_bus));
                     // Units of 2^-40 (10⁻¹²): a few are far below a ppb; the division
@@ -453,7 +465,10 @@ mod tests {
                     if err.abs() > d_bus / 100 {
                         continue; // outside the plausibility bound, never measured
                     }
-                    assert!((got - exact).abs() <= tol, "{slot_ns} {n} {err}: {got} vs {exact}");
+                    assert!(
+                        (got - exact).abs() <= tol,
+                        "{slot_ns} {n} {err}: {got} vs {exact}"
+                    );
                 }
             }
         }
