@@ -3,12 +3,16 @@
 //!
 //! Bus time is nanoseconds since slot 0 of absolute cycle 0. A slave keeps an anchor
 //! (local SOF time of the last sync, and that sync's bus time `abs_cycle · cycle_ns`)
-//! and a rate `local ns per bus ns = 1 + ppb / 10⁹`, measured between consecutive syncs
-//! received. Integer math in 64 bits only (`mul_div` splits products so they cannot
-//! overflow; 128-bit division is a long software routine on Cortex-M3 and its code
-//! alone was 1.4 KiB of a 32 KiB image). Gaps between syncs longer than `MAX_GAP_NS`
-//! (or three cycles, on buses with cycles longer than that) relock instead of
-//! extrapolating.
+//! and a rate `local ns per bus ns = 1 + A`, measured between consecutive syncs
+//! received. The rate is kept as two fixed-point factors, `A · 2^40` and the inverse's
+//! `B · 2^40` (bus per local `= 1 + B`), so mapping a time either way is one multiply and
+//! a shift, and a sync costs one 64-bit division (the rate measurement): the Cortex-M3
+//! has no 64-bit divide, and each `__aeabi_ldivmod` is hundreds of instructions (18 of
+//! them made a slave's sync cost 3 000, issue 10). Counter unwrapping divides in 32 bits
+//! (one instruction) whenever the numbers fit. No 128-bit division (a long software
+//! routine whose code alone was 1.4 KiB of a 32 KiB image); 128-bit products are a few
+//! multiply instructions. Gaps between syncs longer than `MAX_GAP_NS` (or three cycles,
+//! on buses with cycles longer than that) relock instead of extrapolating.
 //!
 //! The 2014 C code measured the slot length once at start-up and then only reset the
 //! phase at each sync (original-rtcan-code.md §2–3): drift was never corrected within a
@@ -18,8 +22,8 @@ use crate::sync::CYCLE_COUNTER_MODULUS;
 use crate::tables::BusConfig;
 use crate::time::Nanos;
 
-/// Parts per billion in one.
-const PPB: i64 = 1_000_000_000;
+/// Fraction bits of the rate factors.
+const Q: u32 = 40;
 /// Longest gap between two syncs bridged with the measured rate (8.5 s, hundreds of
 /// cycles); after a longer silence the slave relocks from scratch. A bus whose cycle is
 /// longer than a third of this bridges three cycles instead (the rate is measured
@@ -45,8 +49,14 @@ pub struct SlotClock {
     abs_cycle: u64,
     /// Cycle counter of the last sync, already reduced modulo `wrap`.
     counter: u32,
-    /// Local clock rate error: local ns per bus ns = 1 + ppb / 10⁹.
-    ppb: i64,
+    /// Local clock rate error: local ns per bus ns = 1 + rate_q40 / 2^40.
+    rate_q40: i64,
+    /// Its inverse: bus ns per local ns = 1 + inv_q40 / 2^40.
+    inv_q40: i64,
+    /// `2^recip_sh / cycle_ns` (32 significant bits), so a sync measures the rate with
+    /// a multiply instead of a 64-bit division; 0 for cycles of 2^32 ns and more.
+    recip: u64,
+    recip_sh: u32,
 }
 
 impl SlotClock {
@@ -75,8 +85,22 @@ impl SlotClock {
             anchor_bus: 0,
             abs_cycle: 0,
             counter: 0,
-            ppb: 0,
+            rate_q40: 0,
+            inv_q40: 0,
+            recip: 0,
+            recip_sh: 0,
         }
+        .with_reciprocal()
+    }
+
+    /// Precomputes `recip` (one 64-bit division, at construction only).
+    fn with_reciprocal(mut self) -> Self {
+        let bits = 64 - self.cycle_ns.leading_zeros();
+        if bits <= 32 {
+            self.recip_sh = 31 + bits;
+            self.recip = (1u64 << self.recip_sh) / self.cycle_ns.max(1);
+        }
+        self
     }
     /// Slave: a sync frame with `cycle_counter` had its SOF at local time `sof`.
     /// Aligns the offset and updates the rate estimate. Returns true when locked.
@@ -103,15 +127,16 @@ impl SlotClock {
         // the counter difference nearest to it: unwraps the counter across any gap the
         // local estimate is good to within ±wrap/2 cycles.
         let cyc = nanos_i64(self.cycle_ns).max(1);
-        let est_bus = mul_div(d_local, PPB, PPB + self.ppb);
-        let n_est = div_round(est_bus, cyc);
+        let est_bus = scale(d_local, self.inv_q40).max(0);
+        let n_est = i64::try_from(div_round_u(est_bus.unsigned_abs(), cyc.unsigned_abs()))
+            .unwrap_or(i64::MAX);
         let wrap = i64::from(self.wrap);
         let diff = i64::from(counter) - i64::from(self.counter);
-        let mut r = (diff - n_est).rem_euclid(wrap);
+        let mut r = rem_euclid_small(diff.saturating_sub(n_est), self.wrap);
         if r > wrap / 2 {
             r -= wrap;
         }
-        let d_cycles = n_est + r;
+        let d_cycles = n_est.saturating_add(r);
         if d_cycles == 0 {
             // The same sync again (e.g. a retransmission): nothing new.
             return true;
@@ -122,29 +147,60 @@ impl SlotClock {
         }
         let d_bus = d_cycles.saturating_mul(cyc);
         let err = d_local - d_bus;
-        // Plausibility first (|err| <= 1 % of d_bus), which also bounds err * PPB.
-        if err.unsigned_abs() > d_bus.unsigned_abs() / 100 {
+        // Plausibility first (|err| <= 1 % of d_bus), which also bounds the measurement.
+        if err.unsigned_abs().saturating_mul(100) > d_bus.unsigned_abs() {
             self.lock(sof, counter);
             return true;
         }
-        let measured = ppb_of(err, d_bus);
-        if measured.abs() > MAX_RATE_PPB {
+        let measured = self.measure(err, d_cycles, d_bus);
+        if measured.unsigned_abs() > MAX_RATE_Q40 {
             self.lock(sof, counter);
             return true;
         }
-        self.ppb = if self.rate_valid {
+        let rate = if self.rate_valid {
             // Light low-pass: SOF timestamps jitter; a real drift change still settles
             // within a few cycles.
-            self.ppb + (measured - self.ppb) / 4
+            self.rate_q40 + (measured - self.rate_q40) / 4
         } else {
             measured
         };
+        self.set_rate(rate);
         self.rate_valid = true;
         self.abs_cycle = self.abs_cycle.saturating_add(d_cycles as u64);
         self.anchor_local = sof;
         self.anchor_bus = self.abs_cycle.saturating_mul(self.cycle_ns);
         self.counter = counter;
         true
+    }
+
+    /// `err / d_bus · 2^40` with `d_bus = d_cycles · cycle_ns`: `err · recip` shifted,
+    /// then divided by `d_cycles` in 16-bit digits (32-bit divides) if syncs were
+    /// missed; the 64-bit division only for cycles ≥ 4.29 s, errors ≥ 2^31 ns or gaps of
+    /// 2^16 cycles and more.
+    fn measure(&self, err: i64, d_cycles: i64, d_bus: i64) -> i64 {
+        let (e, n) = (err.unsigned_abs(), d_cycles.unsigned_abs());
+        if self.recip == 0 || e >> 31 != 0 || n >> 16 != 0 || n == 0 || self.recip_sh < Q {
+            return rate_q40_of(err, d_bus);
+        }
+        // e < 2^31 and recip <= 2^32: the product fits.
+        let sh = self.recip_sh - Q;
+        let per_cycle = (e * self.recip + ((1 << sh) >> 1)) >> sh;
+        let q = if n == 1 {
+            per_cycle
+        } else {
+            div_by_u16(per_cycle, n as u32)
+        };
+        let q = i64::try_from(q).unwrap_or(i64::MAX);
+        if err < 0 {
+            -q
+        } else {
+            q
+        }
+    }
+
+    fn set_rate(&mut self, rate_q40: i64) {
+        self.rate_q40 = rate_q40;
+        self.inv_q40 = inverse_q40(rate_q40);
     }
     /// True once the slave has a usable offset (master: always).
     pub fn is_locked(&self) -> bool {
@@ -157,7 +213,34 @@ impl SlotClock {
     /// Measured rate error of the local clock against the bus in parts per billion
     /// (positive: the local clock runs fast). 0 for the master and before the second sync.
     pub fn rate_ppb(&self) -> i64 {
-        self.ppb
+        // 10⁹ / 2^40 = 1 953 125 / 2^31; |rate_q40| < 2^34 keeps the product below 2^55.
+        (self.rate_q40.saturating_mul(1_953_125) + (1 << 30)) >> 31
+    }
+    /// Local ns per bus ns, as `2^16 ·` a length: the local length of `bus_ns` × 2^16,
+    /// rounded (for the engine's slot map; a multiply, no division).
+    pub fn local_q16(&self, bus_ns: Nanos) -> u64 {
+        let d = nanos_i64(bus_ns).saturating_mul(1 << 16);
+        clamp_nanos(scale(d, self.rate_q40))
+    }
+    /// Bus ns per local ns × 2^32, rounded (the engine's inverse slot map).
+    pub fn bus_per_local_q32(&self) -> u64 {
+        let v = (1i64 << 32) + ((self.inv_q40 + (1 << (Q - 33))) >> (Q - 32));
+        v.max(0).unsigned_abs()
+    }
+    /// The absolute cycle whose slot 0 is nearest to local time `local`: near the last
+    /// sync a 32-bit division, else a 64-bit one.
+    pub fn nearest_cycle(&self, local: Nanos) -> u64 {
+        if local == self.anchor_local && self.anchor_bus != Nanos::MAX {
+            // The sync just handled (or the master's start): no arithmetic.
+            return self.abs_cycle;
+        }
+        let bus = self.to_bus(local);
+        match bus.checked_sub(self.anchor_bus) {
+            Some(d) if self.anchor_bus != Nanos::MAX => {
+                self.abs_cycle.saturating_add(div_round_u(d, self.cycle_ns))
+            }
+            _ => div_round_u(bus, self.cycle_ns),
+        }
     }
     /// Whole cycles elapsed since the last sync received at local time `local` (master:
     /// always 0; unlocked slave: `u64::MAX`). The engine declares sync loss from it.
@@ -187,32 +270,90 @@ impl SlotClock {
         if !self.master {
             self.locked = false;
             self.rate_valid = false;
-            self.ppb = 0;
+            self.set_rate(0);
         }
     }
     /// Bus time (ns since slot 0 of absolute cycle 0) at local time `local`; saturates
     /// at 0 before bus time 0. Before lock a slave returns `local` unchanged.
     pub fn to_bus(&self, local: Nanos) -> Nanos {
         let d_local = nanos_i64(local) - nanos_i64(self.anchor_local);
-        let d_bus = mul_div(d_local, PPB, PPB + self.ppb);
+        let d_bus = scale(d_local, self.inv_q40);
         clamp_nanos(nanos_i64(self.anchor_bus).saturating_add(d_bus))
     }
     /// Local time at which bus time `bus` occurs (within 1 ns, the inverse of `to_bus`).
     pub fn to_local(&self, bus: Nanos) -> Nanos {
         let d_bus = nanos_i64(bus) - nanos_i64(self.anchor_bus);
-        let d_local = mul_div(d_bus, PPB + self.ppb, PPB);
+        let d_local = scale(d_bus, self.rate_q40);
         clamp_nanos(nanos_i64(self.anchor_local).saturating_add(d_local))
     }
 
     fn lock(&mut self, sof: Nanos, counter: u32) {
         self.locked = true;
         self.rate_valid = false;
-        self.ppb = 0;
+        self.set_rate(0);
         self.abs_cycle = u64::from(counter);
         self.counter = counter;
         self.anchor_local = sof;
         self.anchor_bus = self.abs_cycle.saturating_mul(self.cycle_ns);
     }
+}
+
+/// `MAX_RATE_PPB` in units of 2^-40 (rounded up).
+const MAX_RATE_Q40: u64 = (MAX_RATE_PPB as u64 * (1 << 31)).div_ceil(1_953_125);
+
+/// `d · (1 + k / 2^40)`, rounded, saturating: the slot clock's only mapping (no
+/// division). For `|d| < 2^29` (a cycle, or a gap of half a second) and a rate factor
+/// within `MAX_RATE_PPB` the product fits in 64 bits (a few instructions); else a
+/// 128-bit product.
+fn scale(d: i64, k: i64) -> i64 {
+    if d.unsigned_abs() >> 29 == 0 && k.unsigned_abs() <= MAX_RATE_Q40 {
+        return d + ((d * k + (1 << (Q - 1))) >> Q);
+    }
+    let p = (i128::from(d) * i128::from(k) + (1 << (Q - 1))) >> Q;
+    d.saturating_add(i64::try_from(p).unwrap_or(if p < 0 { i64::MIN } else { i64::MAX }))
+}
+
+/// `B = 1 / (1 + A) − 1 = −A + A² − A³ + …` in units of 2^-40, by Horner's rule
+/// (`s ← −A · (1 + s)`): for |A| <= 1 % (`MAX_RATE_PPB`) the terms past A⁶ are below
+/// 10⁻¹² relative (0.01 ns over the longest bridged gap, 8.6 s). No division, 64-bit
+/// products only: `A · s` from both shifted by 6 bits (|A|, |s| < 2^34, so the
+/// product stays below 2^56), off by under 2 units of 2^-40.
+fn inverse_q40(a: i64) -> i64 {
+    if a.unsigned_abs() > MAX_RATE_Q40 {
+        return 0;
+    }
+    let mut s = 0i64;
+    for _ in 0..6 {
+        s = -(a + (((a >> 6) * (s >> 6) + (1 << 27)) >> 28));
+    }
+    s
+}
+
+/// `err · 2^40 / d_bus` rounded, for `|err| <= d_bus / 100` and `d_bus > 0`: the one
+/// 64-bit division of a sync. The numerator is shifted as far as it fits in 62 bits and
+/// the quotient shifted up the rest, so long gaps lose quotient bits (about 7 ppb at
+/// a 3000 s gap), never overflow.
+fn rate_q40_of(err: i64, d_bus: i64) -> i64 {
+    if d_bus <= 0 {
+        return 0;
+    }
+    let headroom = err.unsigned_abs().leading_zeros().saturating_sub(2);
+    let s = headroom.min(Q);
+    let q = div_round(err << s, d_bus);
+    q.saturating_mul(1 << (Q - s))
+}
+
+/// `x / d` rounded down for `0 < d < 2^16`: four 32-bit divisions (one instruction
+/// each on the Cortex-M3) of 16-bit digits, instead of a 64-bit library division.
+fn div_by_u16(x: u64, d: u32) -> u64 {
+    let d = d.clamp(1, 0xFFFF);
+    let (mut q, mut r) = (0u64, 0u32);
+    for shift in [48u32, 32, 16, 0] {
+        let cur = (r << 16) | ((x >> shift) as u32 & 0xFFFF);
+        q = (q << 16) | u64::from(cur / d);
+        r = cur % d;
+    }
+    q
 }
 
 /// `a / b` rounded to nearest (ties up), for `b > 0`.
@@ -223,27 +364,24 @@ fn div_round(a: i64, b: i64) -> i64 {
     (a.saturating_mul(2).saturating_add(b)).div_euclid(b.saturating_mul(2))
 }
 
-/// `err · 10⁹ / d_bus` rounded, for `|err| <= d_bus / 100` and `d_bus > 0`: both are
-/// halved until `d_bus < 2^39`, so the product stays below 2^63 (gaps of 550 s and more
-/// lose well under 1 ppb to the halving).
-fn ppb_of(err: i64, d_bus: i64) -> i64 {
-    let (mut err, mut d_bus) = (err, d_bus);
-    while d_bus >= 1 << 39 {
-        err >>= 1;
-        d_bus >>= 1;
+/// `a / b` rounded to nearest (ties up), `b` 0 read as 1: one 32-bit division when
+/// `a < 2^30` and `b < 2^31` (a 10 ms cycle and gaps up to 1 s), else a 64-bit one.
+fn div_round_u(a: u64, b: u64) -> u64 {
+    let b = b.max(1);
+    if (a >> 30) | (b >> 31) == 0 {
+        let (a, b) = (a as u32, b as u32);
+        return u64::from((2 * a + b) / (2 * b));
     }
-    div_round(err.saturating_mul(PPB), d_bus)
+    a.saturating_add(b / 2) / b
 }
 
-/// `a * num / den` rounded, without overflow for `0 < den < 2^31` and `|num| < 2^31`:
-/// `a = q * den + r` gives `q * num + r * num / den` with `|r * num| < 2^62`.
-fn mul_div(a: i64, num: i64, den: i64) -> i64 {
-    if den <= 0 {
-        return a;
+/// `x mod m` in `0..m` (m > 0): a 32-bit division when `x` fits in an `i32`.
+fn rem_euclid_small(x: i64, m: u32) -> i64 {
+    let m = m.max(1);
+    match (i32::try_from(x), i32::try_from(m)) {
+        (Ok(x), Ok(m)) => i64::from(x.rem_euclid(m)),
+        _ => x.rem_euclid(i64::from(m)),
     }
-    let (q, r) = (a.div_euclid(den), a.rem_euclid(den));
-    q.saturating_mul(num)
-        .saturating_add(div_round(r * num, den))
 }
 
 /// Nanoseconds as i64 (saturating: u64 times past 2^63 ns are 292 years away).
@@ -253,4 +391,112 @@ fn nanos_i64(t: Nanos) -> i64 {
 
 fn clamp_nanos(v: i64) -> Nanos {
     Nanos::try_from(v.max(0)).unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_factor_inverts_within_1e12() {
+        for ppm in [
+            -10_000i64, -5_000, -1_000, -1, 0, 1, 37, 1_000, 5_000, 10_000,
+        ] {
+            let a = (ppm as f64 * 1e-6 * (1u64 << Q) as f64).round() as i64;
+            let b = inverse_q40(a);
+            let exact = -(a as f64) / (1.0 + a as f64 / (1u64 << Q) as f64);
+            assert!((b as f64 - exact).abs() <= 3.0, "{ppm} ppm: {b} vs {exact}");
+            // A long gap maps there and back within 1 ns.
+            let d = 1i64 << 33;
+            assert!((scale(scale(d, a), b) - d).abs() <= 1, "{ppm} ppm");
+        }
+    }
+
+    #[test]
+    fn rate_measurement_is_exact_to_the_ppb_and_never_overflows() {
+        // 1000 ppm over one 10 ms cycle, and over 3000 s (shifted quotient).
+        for d_bus in [10_000_000i64, 3_000_000_000_000] {
+            for ppm in [1_000i64, -1_000, 10_000] {
+                let err = d_bus / 1_000_000 * ppm;
+                let q = rate_q40_of(err, d_bus);
+                let ppb = (q.saturating_mul(1_953_125) + (1 << 30)) >> 31;
+                assert!((ppb - ppm * 1_000).abs() <= 8, "{d_bus} {ppm}: {ppb}");
+            }
+        }
+        assert_eq!(rate_q40_of(0, 1_000), 0);
+        assert_eq!(rate_q40_of(5, 0), 0);
+        assert_eq!(rate_q40_of(i64::MAX / 200, i64::MAX / 100) >> 36, 1 << 3);
+    }
+
+    #[test]
+    fn reciprocal_measurement_matches_the_division() {
+        let bus = |slot_ns: u64| crate::tables::BusConfig {
+            bitrate: 1_000_000,
+            slots_per_cycle: 60,
+            slot_ns,
+            hyperperiod_cycles: 1,
+            cycle_counter_wrap: 1 << 15,
+            laxity: crate::laxity::LaxityEncoding::Linear { unit_ns: 1 },
+            guard_ns: 0,
+            fingerprint: 0,
+        };
+        for slot_ns in [166_666u64, 200_000, 1_000, 70_000_000, 100_000_000] {
+            let clk = SlotClock::slave(&bus(slot_ns));
+            let cyc = nanos_i64(clk.cycle_ns);
+            assert_eq!(clk.recip == 0, cyc >= 1 << 32, "{slot_ns}");
+            for n in [1i64, 2, 3, 255, 65_535, 65_536, 100_000] {
+                let d_bus = n * cyc;
+                for err in [
+                    0,
+                    1,
+                    -1,
+                    12_345,
+                    -(d_bus / 100),
+                    d_bus / 100,
+                    d_bus / 1_000_000,
+                ] {
+                    let exact = (i128::from(err) << Q) / i128::from(d_bus);
+                    let got = i128::from(clk.measure(err, n, d_bus));
+                    // Units of 2^-40 (10⁻¹²): a few are far below a ppb; the division
+                    // fallback (errors of 2^31 ns and more) resolves 2^(40 - s) units,
+                    // s = the numerator's headroom (`rate_q40_of`).
+                    let s = (err.unsigned_abs().leading_zeros().saturating_sub(2)).min(Q);
+                    let tol = (1i128 << (Q - s)).max(exact.abs() >> 30).max(8);
+                    if err.abs() > d_bus / 100 {
+                        continue; // outside the plausibility bound, never measured
+                    }
+                    assert!(
+                        (got - exact).abs() <= tol,
+                        "{slot_ns} {n} {err}: {got} vs {exact}"
+                    );
+                }
+            }
+        }
+        for x in [0u64, 1, 65_535, 1 << 40, u64::MAX] {
+            for d in [1u32, 2, 7, 65_535] {
+                assert_eq!(div_by_u16(x, d), x / u64::from(d), "{x} / {d}");
+            }
+        }
+    }
+
+    #[test]
+    fn rounded_division_agrees_on_the_32_and_64_bit_paths() {
+        for a in [0u64, 1, 4, 5, 6, (1 << 30) - 1, 1 << 30, 1 << 40, 1 << 62] {
+            for b in [1u64, 2, 3, 10, (1 << 31) - 1, 1 << 31, 1 << 35] {
+                let exact = ((u128::from(a) * 2 + u128::from(b)) / (2 * u128::from(b))) as u64;
+                assert_eq!(div_round_u(a, b), exact, "{a} / {b}");
+            }
+        }
+        assert_eq!(div_round_u(u64::MAX, 1), u64::MAX, "saturates");
+        assert_eq!(div_round_u(9, 0), 9, "0 is read as 1");
+        for x in [-70_000i64, -1, 0, 5, 1 << 40, i64::MIN + 1] {
+            for m in [1u32, 7, 32_768] {
+                assert_eq!(
+                    rem_euclid_small(x, m),
+                    x.rem_euclid(i64::from(m)),
+                    "{x} mod {m}"
+                );
+            }
+        }
+    }
 }

@@ -770,8 +770,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let bus = &self.tables.bus;
         let p = &mut self.pos;
         p.abs_cycle = abs_cycle;
-        p.cycle_in_hyper = (abs_cycle % u64::from(bus.hyperperiod_cycles.max(1))) as u32;
-        p.counter = (abs_cycle % u64::from(bus.cycle_counter_wrap.max(1))) as u32;
+        p.cycle_in_hyper = mod_small(abs_cycle, bus.hyperperiod_cycles);
+        p.counter = mod_small(abs_cycle, bus.cycle_counter_wrap);
         p.start_bus = abs_cycle.saturating_mul(bus.cycle_ns());
         p.next_slot = next_slot;
         self.cursor = CalendarCursor::default();
@@ -1206,7 +1206,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
         let bus = self.tables.bus;
         let cycle_ns = bus.cycle_ns().max(1);
-        let abs_cycle = self.clock.to_bus(sof).saturating_add(cycle_ns / 2) / cycle_ns;
+        let abs_cycle = self.clock.nearest_cycle(sof);
         self.last_sync_cycle = abs_cycle;
         self.cycle_mask = sync.mask;
         self.mask_cycle = abs_cycle;
@@ -1215,20 +1215,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             // is not for the cycle this node is executing (its clock ran slow, or a jump).
             self.enter_cycle(abs_cycle, 1);
         }
-        // Refresh the cycle map from the slot clock (the only 64-bit divisions, once per
-        // cycle): offset from this SOF, slot length from the estimated rate.
-        // No overflow: `abs_cycle` is a (saturated) bus time divided by `cycle_ns`.
-        let start_bus = abs_cycle * cycle_ns;
-        let start_local = self.clock.to_local(start_bus);
-        let cycle_local = self
-            .clock
-            .to_local(start_bus.saturating_add(cycle_ns))
-            .saturating_sub(start_local)
-            .max(1);
+        // Refresh the cycle map from the slot clock: offset from this SOF, slot length and
+        // inverse from the rate factors (multiplies; the sync's one 64-bit division is
+        // the clock's rate measurement).
+        let start_bus = abs_cycle.saturating_mul(cycle_ns);
         self.pos.start_bus = start_bus;
-        self.pos.start_local = start_local;
-        self.pos.slot_q16 = ((cycle_local << 16) / bus.slots_per_cycle.max(1) as u64).max(1 << 16);
-        self.pos.inv_q32 = ratio_q32(cycle_ns, cycle_local);
+        self.pos.start_local = self.clock.to_local(start_bus);
+        self.pos.slot_q16 = self.clock.local_q16(bus.slot_ns).max(1 << 16);
+        self.pos.inv_q32 = self.clock.bus_per_local_q32();
         self.next_boundary = self.pos.boundary(self.pos.next_slot);
         if !was_synced && self.is_synced() {
             host.event(Event::Synced);
@@ -1462,28 +1456,14 @@ fn next_tid(tx_tid: &mut [u8; 256], tx: u8) -> u8 {
     }
 }
 
-/// `num · 2^32 / den` rounded down (`den` 0 counts as 1), saturating. One 64-bit
-/// division while `num < 2^32` (cycles up to 4.29 s); longer cycles take three, by
-/// 16-bit long division, exact for `den < 2^48` (78 hours; the model's longest cycle is
-/// 1000 s), so a 5 s cycle maps bus time exactly instead of overflowing `num << 32`.
-fn ratio_q32(num: u64, den: u64) -> u64 {
-    let mut den = den.max(1);
-    let mut num = num;
-    if num >> 32 == 0 {
-        return (num << 32) / den;
+/// `x mod m` (`m` 0 read as 1): a 32-bit division (one instruction on the Cortex-M3)
+/// while `x` fits in 32 bits, a 64-bit library call only after that.
+fn mod_small(x: u64, m: u32) -> u32 {
+    let m = m.max(1);
+    match u32::try_from(x) {
+        Ok(x) => x % m,
+        Err(_) => (x % u64::from(m)) as u32,
     }
-    // Keep `den < 2^48` so the remainders below shift by 16 without overflow.
-    while den >> 48 != 0 {
-        den >>= 1;
-        num >>= 1;
-    }
-    let den = den.max(1);
-    let (q0, r0) = (num / den, num % den);
-    let (q1, r1) = ((r0 << 16) / den, (r0 << 16) % den);
-    let q2 = (r1 << 16) / den;
-    (q0.saturating_mul(1 << 32))
-        .saturating_add(q1 << 16)
-        .saturating_add(q2)
 }
 
 /// DLC of the next frame of a queued item.
@@ -1502,22 +1482,23 @@ fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
 
 #[cfg(test)]
 mod tests {
-    use super::ratio_q32;
+    use super::mod_small;
 
     #[test]
-    fn ratio_q32_is_exact_on_both_paths() {
-        let exact = |n: u64, d: u64| ((u128::from(n) << 32) / u128::from(d)) as u64;
-        for (n, d) in [
-            (10_000_000, 10_000_123),
-            (4_294_967_295, 4_294_000_000),
-            (5_000_000_000, 4_999_000_001),
-            (5_000_000_000, 5_004_000_000),
-            (1_000_000_000_000, 1_000_300_000_017),
-            (1 << 47, (1 << 47) - 1),
+    fn mod_small_matches_u64_remainder_on_both_paths() {
+        for x in [
+            0,
+            1,
+            99,
+            u64::from(u32::MAX),
+            1 << 32,
+            (1 << 40) + 7,
+            u64::MAX,
         ] {
-            assert_eq!(ratio_q32(n, d), exact(n, d), "{n}/{d}");
+            for m in [1, 3, 10, 32_768, u32::MAX] {
+                assert_eq!(u64::from(mod_small(x, m)), x % u64::from(m), "{x} mod {m}");
+            }
         }
-        assert_eq!(ratio_q32(5, 0), 5 << 32);
-        assert_eq!(ratio_q32(u64::MAX, 1), u64::MAX);
+        assert_eq!(mod_small(7, 0), 0, "0 is read as 1");
     }
 }

@@ -109,9 +109,14 @@ fn slave_tracks_fast_and_slow_crystals() {
             ppm,
         };
         let clk = run(&bus(32_760), xtal, 0, 100, |_| true, |_| 0);
-        // Rate measured to the ppb: 1000 ppm = 1,000,000 ppb.
+        // Rate measured to the ppb. The crystal model floors to whole ns, so 24 of every
+        // 25 cycles (the last 24 included) drift exactly ±10 000 ns per 9 999 960 ns cycle,
+        // i.e. ±1 000 004 ppb, and the low-pass filter settles there (the 25th cycle's
+        // 9 999 ns pulls it 100 ppb away, 0.1 ppb left after 24 cycles).
+        let per_cycle = ppm * 10 * 1_000_000_000 / 9_999_960;
+        assert_eq!(per_cycle.abs(), 1_000_004);
         assert!(
-            (clk.rate_ppb() - ppm * 1000).abs() <= 1,
+            (clk.rate_ppb() - per_cycle).abs() <= 1,
             "{} ppb",
             clk.rate_ppb()
         );

@@ -171,7 +171,8 @@ enum Mute {
     Off,
     /// Bus-off: wait for the hardware recovery.
     UntilRecovery,
-    /// Recovered: wait for a sync frame (slave) before transmitting again.
+    /// Recovered: the engine forgot its slot clock and listens (§5.7); transmit again
+    /// once a sync re-synchronised it, or (master-capable) once it took the sync over.
     UntilSync,
 }
 
@@ -196,7 +197,7 @@ struct Gate<'a, L, T, P> {
     _core: PhantomData<fn() -> (T, P)>,
     synthetic: &'a mut u8,
     parked: &'a mut u8,
-    muted: bool,
+    mute: Mute,
     stats: &'a mut ProtocolStats,
 }
 
@@ -213,7 +214,7 @@ where
         if m >= rtcan_core::driver::MAILBOXES {
             return;
         }
-        if self.muted {
+        if self.mute != Mute::Off {
             *self.parked |= 1 << m;
             self.stats.muted_loads = self.stats.muted_loads.saturating_add(1);
             return;
@@ -239,11 +240,17 @@ where
             *self.synthetic |= bit;
             return;
         }
+        // Bus-off: every mailbox was aborted at once (`on_bus_off`) and the plan dropped;
+        // the engine's aborts, one per mailbox it had loaded, are done already and their
+        // completions come from the hardware. Writing them again would abort one by one.
+        let bus_off = self.mute == Mute::UntilRecovery;
         let cancelled = self.slot.lock(|c| match c.plan.stage_abort(m) {
             StagedAbort::Cancelled => true,
             StagedAbort::Deferred => false,
             StagedAbort::NotArmed => {
-                c.tx.abort(bit);
+                if !bus_off {
+                    c.tx.abort(bit);
+                }
                 false
             }
         });
@@ -302,7 +309,7 @@ impl Protocol {
             _core: PhantomData,
             synthetic: &mut self.synthetic,
             parked: &mut self.parked,
-            muted: self.mute != Mute::Off,
+            mute: self.mute,
             stats: &mut self.stats,
         }
     }
@@ -388,8 +395,10 @@ impl Protocol {
     }
 
     /// Bus-off seen (status-change interrupt, after it aborted every mailbox): the plan
-    /// is dropped so no sync or HRT frame goes out late after the recovery, and nothing is
-    /// transmitted until the controller recovered and (on a slave) a sync frame re-synced.
+    /// is dropped so no sync or HRT frame goes out late after the recovery, every mailbox
+    /// is aborted in one write, and nothing is transmitted until the controller recovered
+    /// and the engine re-synchronised on two syncs or (master-capable, after listening for
+    /// its takeover time) took the sync over (docs/PROTOCOL.md §5.6, §5.7).
     #[cold]
     #[inline(never)]
     pub fn on_bus_off<L, T, P, H, const RX: usize, const A: usize, const Q: usize>(
@@ -467,17 +476,29 @@ impl Protocol {
             // like a slave, it transmits again after a sync, its own after a takeover.
             self.mute = Mute::UntilSync;
         }
-        if self.mute == Mute::UntilSync && engine.is_master() {
-            // Nobody else sent a sync while it listened: it took the sync over, and its
-            // sync defines the slots from now on.
-            self.mute = Mute::Off;
-            self.release_parked(slot);
-        }
+        self.unmute_on_takeover(engine, slot);
         self.report_synthetic(engine, host, slot);
         let now = slot.lock(|c| c.timer.now());
         pump(engine, host, now, &mut self.gate(slot));
         self.report_synthetic(engine, host, slot);
         self.prepare(engine, host, slot);
+    }
+
+    /// Recovered and listening, the engine took the sync over (nobody else sent one for
+    /// its takeover time, §5.6): its own sync defines the slots, it transmits again.
+    fn unmute_on_takeover<L, T, P, const RX: usize, const A: usize, const Q: usize>(
+        &mut self,
+        engine: &Engine<'_, RX, A, Q>,
+        slot: &mut L,
+    ) where
+        L: Lock<SlotCore<T, P>>,
+        T: SlotTimerHw,
+        P: TxPort,
+    {
+        if self.mute == Mute::UntilSync && engine.is_master() {
+            self.mute = Mute::Off;
+            self.release_parked(slot);
+        }
     }
 
     fn report_synthetic<L, T, P, H, const RX: usize, const A: usize, const Q: usize>(
@@ -525,6 +546,9 @@ impl Protocol {
                 slot.lock(|c| c.timer.arm_prepare(u64::MAX));
                 return;
             }
+            // The takeover happens in a `poll` below (the engine then starts its first
+            // cycle a slot later): prepare that cycle's sync normally.
+            self.unmute_on_takeover(engine, slot);
             // Muted (bus-off): no plan (nothing may be applied); the engine runs at its
             // wake-ups and whatever it loads is held back by the gate.
             let muted = self.mute != Mute::Off;

@@ -310,6 +310,9 @@ fn bus_off_drops_the_plan_and_mutes_until_recovery() {
     // fires before the protocol task (priority 2) has handled the bus-off: the HRT frame
     // prepared before the bus-off must not be loaded (it would go out after recovery).
     m.core.plan.block();
+    // The heartbeat, loaded in the free window at the slot-1 boundary, is still pending.
+    let pending: Vec<usize> = m.core.tx.writes.iter().map(|w| w.1).collect();
+    assert_eq!(pending.len(), 1);
     m.core.tx.writes.clear();
     m.core.tx.now = 4 * SLOT;
     m.core.timer.now = 4 * SLOT;
@@ -317,6 +320,7 @@ fn bus_off_drops_the_plan_and_mutes_until_recovery() {
     assert!(!m.core.on_commit(), "a blocked plan is not applied");
     m.core.tx.in_commit = false;
     assert!(m.core.tx.writes.is_empty());
+    m.core.tx.aborts.clear();
     m.proto.on_tx_event(
         &TxEvent::BusOff,
         &mut m.engine,
@@ -324,11 +328,19 @@ fn bus_off_drops_the_plan_and_mutes_until_recovery() {
         &mut Direct(&mut m.core),
     );
     assert!(!m.core.plan.is_armed(), "plan dropped");
+    // One write aborts all three mailboxes; the engine's own withdrawal (one abort per
+    // mailbox it had loaded) does not touch the hardware again.
     assert_eq!(
-        m.core.tx.aborts.last(),
-        Some(&0b111),
+        m.core.tx.aborts,
+        vec![0b111],
         "every mailbox aborted at once"
     );
+    // The hardware completes the aborted heartbeat's mailbox (TX interrupt, no TXOK).
+    for mb in pending {
+        let ev = TxEvent::Done(Mailbox(mb as u8), TxResult::Aborted);
+        m.proto
+            .on_tx_event(&ev, &mut m.engine, &mut m.host, &mut Direct(&mut m.core));
+    }
     assert!(m.proto.is_muted());
     assert_eq!(m.engine.counters().bus_off, 1);
     // Two cycles in bus-off: nothing is written; the staged HRT frame was reported.
@@ -336,25 +348,51 @@ fn bus_off_drops_the_plan_and_mutes_until_recovery() {
     m.run();
     m.advance(SLOT + 20 * SLOT);
     assert!(m.core.tx.writes.is_empty(), "{:?}", m.core.tx.writes);
-    assert!(m.proto.stats().muted_loads > 0);
+    // The engine stepped down and withdrew (§5.7): it loads nothing the gate must hold.
+    assert_eq!(m.proto.stats().muted_loads, 0);
     assert!(m.host.done.iter().any(|d| d.1 == TxOutcome::DeadlineMissed));
-    // Recovery: the master transmits again from its next wake-up, on time.
+    // Recovery, noticed when the protocol task next runs (bxCAN raises no interrupt when
+    // BOFF clears; the app's periodic kick runs the task). The master stepped down at
+    // bus-off (§5.7): it listens for its takeover time, 4 cycles at rank 0 (§5.6), and
+    // transmits nothing meanwhile.
     m.core.tx.bus_off = false;
-    m.advance(SLOT + 40 * SLOT);
+    let recovered = SLOT + 20 * SLOT;
+    m.run();
+    assert!(m.proto.is_muted());
+    assert!(!m.engine.is_master());
+    let takeover = recovered + 4 * CYCLE;
+    m.advance(takeover - 1);
+    assert!(m.core.tx.writes.is_empty(), "{:?}", m.core.tx.writes);
+    assert!(m.proto.is_muted());
+    // No sync heard: it takes over, its first cycle a slot later, prepared ahead.
+    m.advance(takeover + SLOT - 1);
+    assert!(m.engine.is_master());
     assert!(!m.proto.is_muted());
-    assert!(!m.core.tx.writes.is_empty());
-    assert!(m
-        .core
-        .tx
-        .writes
-        .iter()
-        .all(|w| w.3 && (w.0 - SLOT).is_multiple_of(SLOT)));
-    assert!(m
-        .core
-        .tx
-        .writes
-        .iter()
-        .any(|w| w.2.frame().unwrap().id().is_sync()));
+    assert!(m.core.plan.is_armed());
+    assert!(m.core.tx.writes.is_empty());
+    // Three cycles, every frame completing within its slot: sync and HRT frame at their
+    // boundaries, all from commits.
+    let start = takeover + SLOT;
+    let mut written = Vec::new();
+    for k in 0..30 {
+        m.advance(start + k * SLOT + SLOT / 2);
+        written.extend(m.core.tx.writes.iter().copied());
+        m.complete_all();
+    }
+    assert!(written.iter().all(|w| w.3), "all by commit");
+    let at = |id: fn(&Frame) -> bool| -> Vec<Nanos> {
+        written
+            .iter()
+            .filter(|w| id(&w.2.frame().unwrap()))
+            .map(|w| w.0 - start)
+            .collect()
+    };
+    assert_eq!(at(|f| f.id().is_sync()), vec![0, CYCLE, 2 * CYCLE]);
+    assert_eq!(
+        at(|f| f.id().msg_id() == HRT_ID),
+        vec![3 * SLOT, CYCLE + 3 * SLOT, 2 * CYCLE + 3 * SLOT]
+    );
+    assert_eq!(m.proto.stats().late_prepares, 0);
 }
 
 fn regs_of(frame: &Frame, time16: u16) -> TxImage {
@@ -495,13 +533,19 @@ fn a_slave_transmits_again_only_after_a_sync_following_bus_off() {
         m.core.tx.writes.is_empty(),
         "nothing at all before the re-sync"
     );
-    // The next sync re-synchronises: slot 3 of that cycle carries the HRT frame again.
+    // Its slot clock was forgotten at bus-off (§5.7): it relocks like a starting slave,
+    // offset on the first sync and rate on the second, and transmits only then.
     feed_sync(&mut m, 7);
+    assert!(m.proto.is_muted());
+    m.advance(8 * CYCLE - SLOT);
+    assert!(m.core.tx.writes.is_empty(), "{:?}", m.core.tx.writes);
+    feed_sync(&mut m, 8);
     assert!(!m.proto.is_muted());
-    m.advance(7 * CYCLE + 5 * SLOT);
-    let w = hrt_writes(&m, 7);
+    m.advance(8 * CYCLE + 5 * SLOT);
+    let w = hrt_writes(&m, 8);
     assert_eq!(w.len(), 1, "{:?}", m.core.tx.writes);
     assert!((3 * SLOT..3 * SLOT + 5_000).contains(&w[0]));
+    assert!(m.core.tx.writes.iter().all(|w| w.3), "all by commit");
 }
 
 #[test]
@@ -517,15 +561,27 @@ fn a_blocked_plan_without_its_bus_off_event_is_handled_as_bus_off() {
     assert!(m.proto.is_muted());
     assert_eq!(m.engine.counters().bus_off, 1);
     assert!(!m.core.plan.is_armed(), "the blocked plan was dropped");
-    // Recovered: transmits again, the plan unblocked.
+    // Recovered (noticed at the next run): the plan is unblocked at the takeover, after
+    // the master listened for 4 cycles (§5.6, §5.7), and its sync goes out by commit.
+    let recovered = 3 * SLOT;
+    m.advance(recovered);
+    assert!(m.proto.is_muted());
+    assert!(m.core.plan.is_blocked());
+    assert!(m.core.tx.writes.is_empty());
     m.core.tx.bus_off = false;
-    m.advance(SLOT + 30 * SLOT);
+    m.run();
+    assert!(m.proto.is_muted());
+    assert!(m.core.plan.is_blocked());
+    m.advance(recovered + 4 * CYCLE + 2 * SLOT);
     assert!(!m.proto.is_muted());
     assert!(!m.core.plan.is_blocked());
-    assert!(m
+    let syncs: Vec<(Nanos, bool)> = m
         .core
         .tx
         .writes
         .iter()
-        .any(|w| w.3 && w.2.frame().unwrap().id().is_sync()));
+        .filter(|w| w.2.frame().unwrap().id().is_sync())
+        .map(|w| (w.0, w.3))
+        .collect();
+    assert_eq!(syncs, vec![(recovered + 4 * CYCLE + SLOT, true)]);
 }
