@@ -67,6 +67,10 @@ pub struct State {
     pub usart1: Usart,
     pub dma1: Dma,
     pub unknown: Vec<UnknownAccess>,
+    /// Exceptions taken, by exception number.
+    pub taken: std::collections::BTreeMap<u16, u64>,
+    /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
+    pub asleep_ps: u64,
     exc_return: bool,
     wfi: bool,
     pub fault: Option<String>,
@@ -269,6 +273,20 @@ extern "C" fn on_code(uc: *mut uc_engine, _addr: u64, _size: u32, ud: *mut c_voi
     }
 }
 
+/// `b .` (0xE7FE): a spin that only an interrupt leaves (RTIC's idle without an idle
+/// task). Equivalent to sleeping: time jumps to the next event, PC stays.
+extern "C" fn on_spin(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    st.wfi = true;
+    let here = addr as u32 | 1;
+    // SAFETY: `uc` is the engine calling this hook.
+    unsafe {
+        uc_reg_write(uc, REG_PC, (&here as *const u32).cast());
+        uc_emu_stop(uc);
+    }
+}
+
 extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
@@ -281,10 +299,18 @@ extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void)
     }
 }
 
-extern "C" fn on_intr(uc: *mut uc_engine, _intno: u32, ud: *mut c_void) {
+extern "C" fn on_intr(uc: *mut uc_engine, intno: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
-    st.exc_return = true;
+    // A branch to EXC_RETURN (0xFFFFFFxx) faults in Unicorn's thread mode (the region is
+    // execute-never): that is the exception return. Anything else is a CPU fault of the image
+    // (UDF of a panic, bad instruction): reported, not modelled as HardFault.
+    let pc = st.pc();
+    if pc >= 0xFFFF_FF00 {
+        st.exc_return = true;
+    } else {
+        st.fault = Some(format!("CPU exception {intno} at pc {pc:#010x}"));
+    }
     // SAFETY: `uc` is the engine calling this hook.
     unsafe { uc_emu_stop(uc) };
 }
@@ -375,6 +401,8 @@ impl Mcu {
             usart1: Usart::default(),
             dma1: Dma::default(),
             unknown: Vec::new(),
+            taken: Default::default(),
+            asleep_ps: 0,
             exc_return: false,
             wfi: false,
             fault: None,
@@ -403,6 +431,10 @@ impl Mcu {
                 };
                 check("mmio", uc_mmio_map(uc, base, size, r, ud, w, ud))?;
             }
+            // Bit-band aliases (Cortex-M3 TRM §3.7, RM0008 §2.3.2): a word per bit of
+            // the peripheral and SRAM regions.
+            check("bitband periph", uc_mmio_map(uc, 0x4200_0000, 0x200_0000, read_bb_periph, ud, write_bb_periph, ud))?;
+            check("bitband sram", uc_mmio_map(uc, 0x2200_0000, 0x200_0000, read_bb_sram, ud, write_bb_sram, ud))?;
             check("mmio dbg", uc_mmio_map(uc, 0xE004_2000, 0x1000, read_dbg, ud, write_dbg, ud)).ok();
             let mut h: uc_hook = 0;
             check("hook code", uc_hook_add(uc, &mut h, UC_HOOK_CODE, on_code as *mut c_void, ud, 1, 0))?;
@@ -412,12 +444,15 @@ impl Mcu {
         // WFI sites (0xBF30 at half-word boundaries of the code): a hook each, to sleep.
         for seg in &image {
             for (i, hw) in seg.bytes.chunks_exact(2).enumerate() {
-                if hw == [0x30, 0xBF] {
-                    let a = u64::from(seg.addr) + 2 * i as u64;
-                    let mut h: uc_hook = 0;
-                    // SAFETY: see above.
-                    unsafe { check("hook wfi", uc_hook_add(uc, &mut h, UC_HOOK_CODE, on_wfi as *mut c_void, ud, a, a))? };
-                }
+                let hook: *mut c_void = match hw {
+                    [0x30, 0xBF] => on_wfi as *mut c_void,
+                    [0xFE, 0xE7] => on_spin as *mut c_void,
+                    _ => continue,
+                };
+                let a = u64::from(seg.addr) + 2 * i as u64;
+                let mut h: uc_hook = 0;
+                // SAFETY: see above.
+                unsafe { check("hook wfi", uc_hook_add(uc, &mut h, UC_HOOK_CODE, hook, ud, a, a))? };
             }
         }
         let mut mcu = Mcu {
@@ -586,6 +621,7 @@ impl Mcu {
         let vector = self.mem_read_u32(self.st.scs.vtor + 4 * u32::from(exc));
         self.set_reg(REG_PC, vector & !1);
         self.st.scs.activate(exc);
+        *self.st.taken.entry(exc).or_insert(0) += 1;
         let ps = self.cycles_ps(self.st.timing.exception_cycles);
         self.st.add_time(ps);
     }
@@ -669,6 +705,7 @@ impl Mcu {
                 let next = self.next_event().unwrap_or(until).min(until).max(self.st.now() + 1);
                 let now = self.st.now();
                 self.st.add_time(next - now);
+                self.st.asleep_ps += next - now;
                 continue;
             }
             let horizon = self.next_event().unwrap_or(until).min(until);
@@ -684,9 +721,12 @@ impl Mcu {
                 self.exc_return();
                 continue;
             }
+            if let Some(f) = &self.st.fault {
+                return Err(format!("{}: {f}", self.name));
+            }
             if e != 0 && !self.st.wfi {
                 let pc = self.reg(REG_PC);
-                return Err(format!("{}: CPU fault {e} at pc {pc:#010x}", self.name));
+                return Err(format!("{}: CPU fault {e} at pc {pc:#010x} after {} instructions", self.name, self.st.instructions));
             }
         }
         Ok(())
@@ -710,4 +750,57 @@ extern "C" fn read_dbg(uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_void)
 }
 extern "C" fn write_dbg(uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *mut c_void) {
     mmio_write(uc, off + 0xE004_2000, size, v, ud)
+}
+
+/// Bit-band alias word `off` → (word address, bit) in the region at `base`.
+fn bitband(base: u32, off: u64) -> (u32, u32) {
+    let byte = (off / 32) as u32;
+    let bit = ((off % 32) / 4) as u32 + 8 * (byte & 3);
+    (base + (byte & !3), bit)
+}
+
+extern "C" fn read_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, ud: *mut c_void) -> u64 {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let (addr, bit) = bitband(0x4000_0000, off);
+    match st.read(addr, 4) {
+        Ok(v) => u64::from((v >> bit) & 1),
+        Err(a) => {
+            st.unknown_access(a, false);
+            0
+        }
+    }
+}
+
+extern "C" fn write_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, v: u64, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let (addr, bit) = bitband(0x4000_0000, off);
+    let r = st.read(addr, 4).and_then(|old| {
+        let new = if v & 1 != 0 { old | (1 << bit) } else { old & !(1 << bit) };
+        st.write(addr, 4, new)
+    });
+    if let Err(a) = r {
+        st.unknown_access(a, true);
+    }
+}
+
+extern "C" fn read_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, _ud: *mut c_void) -> u64 {
+    let (addr, bit) = bitband(SRAM_BASE, off);
+    let mut b = [0u8; 4];
+    // SAFETY: `uc` is the engine calling back; `b` has 4 writable bytes.
+    unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+    u64::from((u32::from_le_bytes(b) >> bit) & 1)
+}
+
+extern "C" fn write_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, v: u64, _ud: *mut c_void) {
+    let (addr, bit) = bitband(SRAM_BASE, off);
+    let mut b = [0u8; 4];
+    // SAFETY: as in `read_bb_sram`.
+    unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+    let old = u32::from_le_bytes(b);
+    let new = if v & 1 != 0 { old | (1 << bit) } else { old & !(1 << bit) };
+    let nb = new.to_le_bytes();
+    // SAFETY: as in `read_bb_sram`.
+    unsafe { uc_mem_write(uc, u64::from(addr), nb.as_ptr().cast(), 4) };
 }

@@ -27,3 +27,12 @@ fn gateway_boots_clocks_and_can() {
     assert_eq!(m.st.can.mode(), Mode::Normal);
     assert_eq!(m.st.bit_ps, 1_000_000, "1 Mbit/s");
 }
+
+#[test]
+fn debug_gateway() {
+    let mut m = Mcu::new("gateway", &image("gateway"), Timing::default()).unwrap();
+    for i in 0..10 {
+        let r = m.run_until((i + 1) * MS);
+        eprintln!("t={}ms instr={} can={:?} unk={:?} active={:?} r={:?} taken={:?} asleep={}", i + 1, m.st.instructions, m.st.can.mode(), m.st.unknown.len(), m.st.scs.active, r, m.st.taken, m.st.asleep_ps / 1000_000);
+    }
+}
