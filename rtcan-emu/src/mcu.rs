@@ -2,7 +2,7 @@
 //! and `bxcan`, with time = instructions retired × cycles per instruction.
 use crate::bxcan::BxCan;
 use crate::elf;
-use crate::periph::{Afio, Dma, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, Usart, APB1_CAN, APB1_TIM2, PS};
+use crate::periph::{Adc, Afio, Dma, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, Usart, APB1_CAN, PS};
 use crate::scs::Scs;
 use crate::uc::*;
 use crate::Access;
@@ -61,12 +61,16 @@ pub struct State {
     pub gpio: [Gpio; 5],
     pub afio: Afio,
     pub exti: Exti,
-    pub tim2: Tim2,
+    /// TIM2, TIM3, TIM4 (index 0..3).
+    pub tim: [Tim2; 3],
+    pub adc1: Adc,
     pub can: BxCan,
     pub iwdg: Iwdg,
     pub usart1: Usart,
     pub dma1: Dma,
     pub unknown: Vec<UnknownAccess>,
+    /// All unknown accesses, repeats included.
+    pub unknown_count: u64,
     /// Exceptions taken, by exception number.
     pub taken: std::collections::BTreeMap<u16, u64>,
     /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
@@ -120,13 +124,18 @@ impl State {
         let now = self.now();
         let cyc = self.cycles();
         let r = match addr {
-            0x4000_0000..=0x4000_03FF => {
-                if self.rcc.apb1enr & APB1_TIM2 == 0 {
+            // TIM2/3/4 at 0x4000_0000/0400/0800, clocked by APB1ENR bits 0..2 (§7.3.8).
+            0x4000_0000..=0x4000_0BFF => {
+                let i = ((addr >> 10) & 3) as usize;
+                if self.rcc.apb1enr & (1 << i) == 0 {
                     return Err(addr);
                 }
-                self.tim2.sync(now, self.rcc.tim2clk());
-                self.tim2.read(addr & 0x3FF)
+                let clk = self.rcc.tim2clk();
+                let t = self.tim.get_mut(i).ok_or(addr)?;
+                t.sync(now, clk);
+                t.read(addr & 0x3FF)
             }
+            0x4001_2400..=0x4001_27FF => self.adc1.read(addr & 0x3FF),
             0x4000_3000..=0x4000_33FF => self.iwdg.read(addr & 0x3FF),
             0x4000_6400..=0x4000_67FF => {
                 if self.rcc.apb1enr & APB1_CAN == 0 {
@@ -161,13 +170,17 @@ impl State {
         let now = self.now();
         let cyc = self.cycles();
         let r = match addr {
-            0x4000_0000..=0x4000_03FF => {
-                if self.rcc.apb1enr & APB1_TIM2 == 0 {
+            0x4000_0000..=0x4000_0BFF => {
+                let i = ((addr >> 10) & 3) as usize;
+                if self.rcc.apb1enr & (1 << i) == 0 {
                     return Err(addr);
                 }
-                self.tim2.sync(now, self.rcc.tim2clk());
-                self.tim2.write(addr & 0x3FF, v)
+                let clk = self.rcc.tim2clk();
+                let t = self.tim.get_mut(i).ok_or(addr)?;
+                t.sync(now, clk);
+                t.write(addr & 0x3FF, v)
             }
+            0x4001_2400..=0x4001_27FF => self.adc1.write(addr & 0x3FF, v),
             0x4000_3000..=0x4000_33FF => self.iwdg.write(addr & 0x3FF, v, now),
             0x4000_6400..=0x4000_67FF => {
                 if self.rcc.apb1enr & APB1_CAN == 0 {
@@ -210,6 +223,11 @@ impl State {
     }
 
     fn unknown_access(&mut self, addr: u32, write: bool) {
+        self.unknown_count += 1;
+        // One record per (address, direction): the first one, with its PC and time.
+        if self.unknown.iter().any(|u| u.addr == addr && u.write == write) {
+            return;
+        }
         let rec = UnknownAccess {
             addr,
             pc: self.pc(),
@@ -395,12 +413,14 @@ impl Mcu {
             gpio: Default::default(),
             afio: Afio::default(),
             exti: Exti::default(),
-            tim2: Tim2::new(),
+            tim: [Tim2::new(), Tim2::new(), Tim2::new()],
+            adc1: Adc::new(),
             can: BxCan::default(),
             iwdg: Iwdg::new(),
             usart1: Usart::default(),
             dma1: Dma::default(),
             unknown: Vec::new(),
+            unknown_count: 0,
             taken: Default::default(),
             asleep_ps: 0,
             exc_return: false,
@@ -510,7 +530,8 @@ impl Mcu {
         st.gpio = Default::default();
         st.afio = Afio::default();
         st.exti = Exti::default();
-        st.tim2 = Tim2::new();
+        st.tim = [Tim2::new(), Tim2::new(), Tim2::new()];
+        st.adc1 = Adc::new();
         st.can = BxCan::default();
         st.iwdg = Iwdg::new();
         st.usart1 = Usart::default();
@@ -550,9 +571,12 @@ impl Mcu {
         let now = self.st.now();
         let clk = self.st.rcc.tim2clk();
         let st = &mut self.st;
-        st.tim2.sync(now, clk);
-        if st.tim2.irq() {
-            st.scs.set_pending(28);
+        // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
+        for (i, t) in st.tim.iter_mut().enumerate() {
+            t.sync(now, clk);
+            if t.irq() {
+                st.scs.set_pending(28 + i);
+            }
         }
         let cyc = st.cycles();
         st.scs.sync_systick(cyc);
@@ -672,7 +696,12 @@ impl Mcu {
     pub fn next_event(&self) -> Option<u64> {
         let st = &self.st;
         let now = st.now();
-        let mut t = st.tim2.next_event(now, st.rcc.tim2clk());
+        let mut t: Option<u64> = None;
+        for tim in &st.tim {
+            if let Some(at) = tim.next_event(now, st.rcc.tim2clk()) {
+                t = Some(t.map_or(at, |x| x.min(at)));
+            }
+        }
         let hz = st.rcc.hclk().max(1);
         if let Some(c) = st.scs.systick_due_in() {
             let at = now + c * PS / hz;

@@ -333,8 +333,10 @@ impl Exti {
     }
 }
 
-/// TIM2, up-counting (RM0008 §15.3.2, registers §15.4): counter, prescaler with preload,
-/// auto-reload, four compare channels, update/compare flags and interrupts.
+/// A general-purpose timer TIM2..TIM4, up-counting (RM0008 §15.3.2, registers §15.4):
+/// counter, prescaler with preload, auto-reload, four compare channels, update/compare
+/// flags and interrupts. In encoder mode (SMCR.SMS = 1..3, §15.3.12) the counter follows
+/// the encoder inputs instead of the clock: the plant moves it with `encoder_step`.
 #[derive(Clone, Debug, Default)]
 pub struct Tim2 {
     cr1: u32,
@@ -367,7 +369,26 @@ impl Tim2 {
     }
 
     fn running(&self) -> bool {
-        self.cr1 & 1 != 0
+        self.cr1 & 1 != 0 && !self.encoder_mode()
+    }
+
+    /// SMCR.SMS = 001, 010, 011: encoder modes 1..3 (§15.4.3).
+    pub fn encoder_mode(&self) -> bool {
+        (1..=3).contains(&(self.smcr & 7))
+    }
+
+    /// Encoder edges (signed count, §15.3.12): the counter moves modulo ARR+1.
+    pub fn encoder_step(&mut self, edges: i64) {
+        if self.cr1 & 1 == 0 || !self.encoder_mode() {
+            return;
+        }
+        let period = i64::from(self.arr) + 1;
+        self.cnt = (i64::from(self.cnt) + edges).rem_euclid(period) as u32;
+    }
+
+    /// Compare value of channel `ch` (0..4) and ARR: the PWM duty an H-bridge sees.
+    pub fn pwm(&self, ch: usize) -> (u32, u32) {
+        (self.ccr.get(ch).copied().unwrap_or(0), self.arr)
     }
 
     /// Brings the counter to time `now` with timer clock `clk_hz`, setting UIF/CCxIF for
@@ -663,6 +684,98 @@ impl Dma {
                     _ => v,
                 };
             }
+            _ => return Err(off),
+        }
+        Ok(0)
+    }
+}
+
+/// ADC1 (RM0008 §11, registers §11.12): single regular conversions started by SWSTART or
+/// by writing ADON again (§11.3.1); a conversion completes at once with the level the
+/// plant set for the channel of SQR3.SQ1 (conversion time not modelled). Calibration
+/// (CAL, RSTCAL) completes at once.
+#[derive(Clone, Debug, Default)]
+pub struct Adc {
+    sr: u32,
+    cr1: u32,
+    cr2: u32,
+    smpr: [u32; 2],
+    jofr: [u32; 4],
+    htr: u32,
+    ltr: u32,
+    sqr: [u32; 3],
+    jsqr: u32,
+    dr: u32,
+    /// 12-bit input level per channel, driven by the plant.
+    pub input: [u16; 18],
+}
+
+impl Adc {
+    pub fn new() -> Self {
+        Adc {
+            htr: 0xFFF,
+            ..Default::default()
+        }
+    }
+
+    fn convert(&mut self) {
+        let ch = (self.sqr.get(2).copied().unwrap_or(0) & 0x1F) as usize;
+        self.dr = u32::from(self.input.get(ch).copied().unwrap_or(0) & 0xFFF);
+        self.sr |= 0x12; // EOC, STRT
+    }
+
+    pub fn read(&mut self, off: u32) -> Access {
+        Ok(match off {
+            0x00 => self.sr,
+            0x04 => self.cr1,
+            0x08 => self.cr2,
+            0x0C | 0x10 => self.smpr.get(((off - 0x0C) / 4) as usize).copied().unwrap_or(0),
+            0x14..=0x20 => self.jofr.get(((off - 0x14) / 4) as usize).copied().unwrap_or(0),
+            0x24 => self.htr,
+            0x28 => self.ltr,
+            0x2C..=0x34 => self.sqr.get(((off - 0x2C) / 4) as usize).copied().unwrap_or(0),
+            0x38 => self.jsqr,
+            0x3C..=0x48 => 0,
+            // Reading DR clears EOC (§11.12.1).
+            0x4C => {
+                self.sr &= !2;
+                self.dr
+            }
+            _ => return Err(off),
+        })
+    }
+
+    pub fn write(&mut self, off: u32, v: u32) -> Access {
+        match off {
+            0x00 => self.sr &= v | !0x1F,
+            0x04 => self.cr1 = v & 0x00CF_FFFF,
+            0x08 => {
+                let was_on = self.cr2 & 1 != 0;
+                // CAL (bit 2) and RSTCAL (bit 3) clear when done: at once here.
+                self.cr2 = v & 0x00FE_E90B & !0xC;
+                let swstart = v & (1 << 22) != 0 && self.cr2 & (7 << 17) == (7 << 17);
+                if (was_on && v & 1 != 0 && v & 0xC == 0 && v & (1 << 22) == 0) || swstart {
+                    self.convert();
+                }
+            }
+            0x0C | 0x10 => {
+                if let Some(r) = self.smpr.get_mut(((off - 0x0C) / 4) as usize) {
+                    *r = v;
+                }
+            }
+            0x14..=0x20 => {
+                if let Some(r) = self.jofr.get_mut(((off - 0x14) / 4) as usize) {
+                    *r = v & 0xFFF;
+                }
+            }
+            0x24 => self.htr = v & 0xFFF,
+            0x28 => self.ltr = v & 0xFFF,
+            0x2C..=0x34 => {
+                if let Some(r) = self.sqr.get_mut(((off - 0x2C) / 4) as usize) {
+                    *r = v;
+                }
+            }
+            0x38 => self.jsqr = v,
             _ => return Err(off),
         }
         Ok(0)

@@ -36,3 +36,20 @@ fn debug_gateway() {
         eprintln!("t={}ms instr={} can={:?} unk={:?} active={:?} r={:?} taken={:?} asleep={}", i + 1, m.st.instructions, m.st.can.mode(), m.st.unknown.len(), m.st.scs.active, r, m.st.taken, m.st.asleep_ps / 1000_000);
     }
 }
+
+#[test]
+fn debug_six() {
+    let mcus: Vec<Mcu> = MODULES.iter().map(|n| Mcu::new(n, &image(n), Timing::default()).unwrap()).collect();
+    let mut bus = Bus::new(mcus, 1_000_000);
+    let t0 = std::time::Instant::now();
+    for i in 0..10 {
+        let r = bus.run_until((i + 1) * 10 * MS);
+        eprintln!("t={}ms frames={} r={:?} wall={:?}", (i + 1) * 10, bus.log.len(), r, t0.elapsed());
+        for m in &bus.mcus {
+            eprintln!("  {} instr={} can={:?} unk={:x?} tec={} taken={:?}", m.name, m.st.instructions, m.st.can.mode(), m.st.unknown.iter().map(|u| (u.addr, u.pc, u.write)).collect::<Vec<_>>(), m.st.can.tec, m.st.taken);
+        }
+    }
+    for (n, f, sof) in bus.log.iter().take(20) {
+        eprintln!("{sof} node {n} id {:#x} dlc {}", f.id, f.dlc);
+    }
+}
