@@ -486,6 +486,11 @@ impl Mcu {
         Ok(mcu)
     }
 
+    /// Program counter.
+    pub fn pc(&self) -> u32 {
+        self.reg(REG_PC)
+    }
+
     fn reg(&self, r: i32) -> u32 {
         let mut v: u32 = 0;
         // SAFETY: live engine, valid out-pointer.

@@ -751,8 +751,9 @@ impl Adc {
             0x04 => self.cr1 = v & 0x00CF_FFFF,
             0x08 => {
                 let was_on = self.cr2 & 1 != 0;
-                // CAL (bit 2) and RSTCAL (bit 3) clear when done: at once here.
-                self.cr2 = v & 0x00FE_E90B & !0xC;
+                // CAL (bit 2) and RSTCAL (bit 3) clear when done, SWSTART/JSWSTART (22/21)
+                // when the conversion starts (§11.12.3): all at once here.
+                self.cr2 = v & 0x009E_E90B & !0xC;
                 let swstart = v & (1 << 22) != 0 && self.cr2 & (7 << 17) == (7 << 17);
                 if (was_on && v & 1 != 0 && v & 0xC == 0 && v & (1 << 22) == 0) || swstart {
                     self.convert();

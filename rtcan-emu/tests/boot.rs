@@ -53,3 +53,12 @@ fn debug_six() {
         eprintln!("{sof} node {n} id {:#x} dlc {}", f.id, f.dlc);
     }
 }
+
+#[test]
+fn debug_pc() {
+    let mut m = Mcu::new("proximity", &image("proximity"), Timing::default()).unwrap();
+    for i in 0..8u64 {
+        m.run_until(20 * MS + i * 13_000_000).unwrap();
+        eprintln!("pc {:#x} active {:?}", m.pc(), m.st.scs.active);
+    }
+}
