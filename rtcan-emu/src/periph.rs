@@ -356,7 +356,7 @@ pub struct Tim2 {
     ccr: [u32; 4],
     /// Time (ps) the counter state was last brought up to date.
     synced: u64,
-    /// Picoseconds of timer clock carried over (less than one cycle).
+    /// Part of a timer-clock cycle carried over, in ps·Hz (less than 10^12).
     carry: u64,
 }
 
@@ -394,15 +394,16 @@ impl Tim2 {
     /// Brings the counter to time `now` with timer clock `clk_hz`, setting UIF/CCxIF for
     /// every update and compare match passed (§15.3.2, §15.3.9).
     pub fn sync(&mut self, now: u64, clk_hz: u64) {
-        let elapsed = now.saturating_sub(self.synced) + self.carry;
+        let elapsed = now.saturating_sub(self.synced);
         self.synced = now;
         if !self.running() || clk_hz == 0 {
             self.carry = 0;
             return;
         }
-        let cycle_ps = PS / clk_hz;
-        let cycles = elapsed / cycle_ps;
-        self.carry = elapsed % cycle_ps;
+        // Exact: timer-clock cycles = elapsed × clk / 10^12, remainder carried (ps·Hz).
+        let total = u128::from(elapsed) * u128::from(clk_hz) + u128::from(self.carry);
+        let cycles = (total / u128::from(PS)) as u64;
+        self.carry = (total % u128::from(PS)) as u64;
         let div = u64::from(self.psc_active) + 1;
         let total = self.psc_cnt + cycles;
         let ticks = total / div;
@@ -456,8 +457,8 @@ impl Tim2 {
         }
         let div = u64::from(self.psc_active) + 1;
         let cycles = (ticks * div).saturating_sub(self.psc_cnt);
-        let cycle_ps = PS / clk_hz;
-        Some(now + (cycles * cycle_ps).saturating_sub(self.carry))
+        let need = (u128::from(cycles) * u128::from(PS)).saturating_sub(u128::from(self.carry));
+        Some(now + need.div_ceil(u128::from(clk_hz)) as u64)
     }
 
     /// The TIM2 interrupt line (§15.4.4 DIER and §15.4.5 SR).
@@ -782,3 +783,7 @@ impl Adc {
         Ok(0)
     }
 }
+
+#[cfg(test)]
+#[path = "periph_tests.rs"]
+mod tests;

@@ -453,3 +453,7 @@ impl Scs {
         self.scr & 2 != 0
     }
 }
+
+#[cfg(test)]
+#[path = "scs_tests.rs"]
+mod tests;
