@@ -8,11 +8,12 @@ use crate::uc::*;
 use crate::Access;
 use core::ffi::c_void;
 
-/// Memory of the STM32F103xB (RM0008 §3.3, datasheet table 2: 128 KiB flash, 20 KiB SRAM).
+/// Memory of the largest STM32F103 the images target (xE: 512 KiB flash, 64 KiB SRAM; RM0008
+/// §3.3); a C8 image simply never touches the rest.
 pub const FLASH_BASE: u32 = 0x0800_0000;
-pub const FLASH_SIZE: u32 = 128 * 1024;
+pub const FLASH_SIZE: u32 = 512 * 1024;
 pub const SRAM_BASE: u32 = 0x2000_0000;
-pub const SRAM_SIZE: u32 = 20 * 1024;
+pub const SRAM_SIZE: u32 = 64 * 1024;
 
 /// Emulated time per instruction.
 #[derive(Clone, Copy, Debug)]

@@ -1,0 +1,113 @@
+//! The six Triskar2 release images (`cd examples/triskar2 && cargo build --release`) on
+//! six emulated STM32F103 on one emulated bus: boot, run, and survive bus faults.
+use rtcan_emu::bus::Bus;
+use rtcan_emu::bxcan::{Mode, RawFrame};
+use rtcan_emu::mcu::{Mcu, Timing};
+use std::path::PathBuf;
+
+const MODULES: [&str; 6] = ["gateway", "motor1", "motor2", "motor3", "proximity", "psu"];
+/// Picoseconds per millisecond.
+const MS: u64 = 1_000_000_000;
+/// Bit time at 1 Mbit/s, ps.
+const BIT: u64 = 1_000_000;
+
+fn image(name: &str) -> Vec<u8> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/triskar2/target/thumbv7m-none-eabi/release")
+        .join(name);
+    std::fs::read(&p).unwrap_or_else(|e| {
+        panic!("{}: {e} (build the images first: cd examples/triskar2 && cargo build --release)", p.display())
+    })
+}
+
+fn robot() -> Bus {
+    let mcus = MODULES
+        .iter()
+        .map(|n| Mcu::new(n, &image(n), Timing::default()).unwrap())
+        .collect();
+    Bus::new(mcus, BIT)
+}
+
+/// Frames sent by `node` with SOF in [from, to) bit times.
+fn sent(bus: &Bus, node: usize, from: u64, to: u64) -> usize {
+    bus.log.iter().filter(|(n, _, sof)| *n == node && (from..to).contains(sof)).count()
+}
+
+fn no_unknown(bus: &Bus) {
+    for m in &bus.mcus {
+        assert_eq!(m.st.unknown, vec![], "{}: unknown register accesses", m.name);
+        assert_eq!(m.st.fault, None, "{}", m.name);
+    }
+}
+
+/// The gateway's cycle: SOF distance of its first two frames with ID < 0x100 (the
+/// cycle-start reference, whose ID counts the cycles).
+fn cycle_bits(bus: &Bus) -> u64 {
+    let refs: Vec<u64> = bus.log.iter().filter(|(n, f, _)| *n == 0 && f.id < 0x100).map(|(_, _, s)| *s).collect();
+    assert!(refs.len() >= 2, "gateway sends its cycle reference");
+    refs[1] - refs[0]
+}
+
+/// First SOF (bit time) of a frame with identifier `id`.
+fn first_of(bus: &Bus, id: u32) -> Option<u64> {
+    bus.log.iter().find(|(_, f, _)| f.id == id).map(|(_, _, s)| *s)
+}
+
+/// Frames with identifier `id` and SOF in [from, to) bit times.
+fn count_of(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
+    bus.log.iter().filter(|(_, f, s)| f.id == id && (from..to).contains(s)).count() as u64
+}
+
+// Identifiers of the HRT topics as the images send them (checked against robot.toml's
+// rates in `five_seconds_of_triskar2`): encoder1 0xA200, wheel_setpoints 0xA380/0xA381,
+// encoder3 0xA280, odometry 0xA000..0xA003, proximity 0xA080.
+const ENCODER1: u32 = 0xA200;
+const WHEEL_SETPOINTS: u32 = 0xA380;
+const ENCODER3: u32 = 0xA280;
+const ODOMETRY: u32 = 0xA000;
+const PROXIMITY: u32 = 0xA080;
+
+#[test]
+fn six_images_boot_and_sync_within_three_cycles() {
+    let mut bus = robot();
+    bus.run_until(200 * MS).unwrap();
+    no_unknown(&bus);
+    for m in &bus.mcus {
+        assert_eq!(m.st.rcc.sysclk(), 72_000_000, "{}", m.name);
+        assert_eq!(m.st.rcc.pclk1(), 36_000_000, "{}", m.name);
+        assert_eq!(m.st.can.mode(), Mode::Normal, "{}", m.name);
+        assert_eq!(m.st.bit_ps, BIT, "{}: 1 Mbit/s", m.name);
+    }
+    let cycle = cycle_bits(&bus);
+    assert_eq!(cycle, 10_001, "10 ms cycle (robot.toml) measured SOF to SOF");
+    let first_ref = bus.log.first().map(|(_, _, s)| *s).unwrap();
+    assert!(first_ref < 1_000, "gateway on the bus within 1 ms of power-on: {first_ref}");
+    // Each publisher's first HRT frame: within 3 cycles of the first reference, plus its
+    // own period for topics slower than the cycle (it is due once per period).
+    for (id, period_bits) in [(ENCODER1, 0), (WHEEL_SETPOINTS, 0), (ENCODER3, 0), (ODOMETRY, 20_000), (PROXIMITY, 40_000)] {
+        let at = first_of(&bus, id).unwrap_or(u64::MAX);
+        assert!(at < first_ref + 3 * cycle + period_bits, "{id:#x} first at bit {at}");
+    }
+}
+
+#[test]
+fn five_seconds_of_triskar2() {
+    let mut bus = robot();
+    let t0 = std::time::Instant::now();
+    bus.run_until(5_000 * MS).unwrap();
+    let wall = t0.elapsed().as_secs_f64();
+    no_unknown(&bus);
+    // Rates of robot.toml over the last four seconds: each HRT message in every one of its
+    // periods (±1 at the window edges).
+    let (from, to) = (1_000 * MS / BIT, 5_000 * MS / BIT);
+    for (id, hz) in [(ENCODER1, 200), (WHEEL_SETPOINTS, 100), (WHEEL_SETPOINTS + 1, 100), (ENCODER3, 200), (ODOMETRY, 50), (ODOMETRY + 3, 50), (PROXIMITY, 25)] {
+        let n = count_of(&bus, id, from, to);
+        assert!(n.abs_diff(4 * hz) <= 1, "{id:#x}: {n} frames in 4 s, {hz} Hz expected");
+    }
+    let refs = bus.log.iter().filter(|(n, f, s)| *n == 0 && f.id < 0x1000 && (from..to).contains(s)).count();
+    assert!(refs.abs_diff(400) <= 1, "cycle references: {refs}");
+    for m in &bus.mcus {
+        assert_eq!(m.st.can.tec, 0, "{}: no transmit errors", m.name);
+    }
+    eprintln!("5 s emulated in {wall:.2} s wall: {:.2}x real time", 5.0 / wall);
+}
