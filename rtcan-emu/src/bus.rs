@@ -51,6 +51,24 @@ impl Bus {
         }
     }
 
+    /// Resets MCU `node` (power cycle or NRST) while the bus runs. A frame it was sending
+    /// is cut short: the others see an error frame and drop it (ISO 11898-1), modelled as
+    /// the frame never arriving.
+    pub fn reset_node(&mut self, node: usize) -> Result<(), String> {
+        if self.on_wire.as_ref().is_some_and(|t| t.node == node) {
+            self.on_wire = None;
+        }
+        match self.mcus.get_mut(node) {
+            Some(m) => m.reset().map_err(|e| format!("{e:?}")),
+            None => Err(format!("no node {node}")),
+        }
+    }
+
+    /// Current bus time in bits.
+    pub fn bit(&self) -> u64 {
+        self.mcus.iter().map(|m| m.now()).min().unwrap_or(0) / self.bit_ps.max(1)
+    }
+
     /// Runs all MCUs and the bus to time `until` (ps), one bit at a time between frames
     /// and frame by frame on the wire.
     pub fn run_until(&mut self, until: u64) -> Result<(), String> {

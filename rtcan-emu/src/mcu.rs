@@ -542,6 +542,9 @@ impl Mcu {
         st.iwdg = Iwdg::new();
         st.usart1 = Usart::default();
         st.dma1 = Dma::default();
+        // The core restarts awake, with no exception in progress.
+        st.wfi = false;
+        st.exc_return = false;
         st.base_ps = now;
         st.base_instr = st.instructions;
         st.retime();

@@ -111,3 +111,84 @@ fn five_seconds_of_triskar2() {
     }
     eprintln!("5 s emulated in {wall:.2} s wall: {:.2}x real time", 5.0 / wall);
 }
+
+/// Frames of `id` in [from, to) ms.
+fn count_ms(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
+    count_of(bus, id, from * MS / BIT, to * MS / BIT)
+}
+
+#[test]
+fn bus_off_and_recovery() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    let mcr = bus.mcus[1].st.can.read(0).unwrap();
+    let bit = bus.bit();
+    // 32 transmit errors: TEC 256, bus-off (RM0008 §24.7.6).
+    bus.mcus[1].st.can.inject_tx_errors(32, bit);
+    assert!(bus.mcus[1].st.can.is_bus_off());
+    bus.run_until(310 * MS).unwrap();
+    // Silent until the automatic recovery after 128 x 11 recessive bits.
+    assert_eq!(count_of(&bus, ENCODER1, bit, bit + 128 * 11), 0, "bus-off: motor1 silent");
+    assert!(count_of(&bus, ENCODER1, bit + 128 * 11, bit + 10_000) >= 1, "motor1 back");
+    assert!(count_ms(&bus, ENCODER3, 301, 310) >= 1, "the others go on");
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert!(mcr & (1 << 6) != 0, "the board enables automatic bus-off management (ABOM)");
+    assert!(!bus.mcus[1].st.can.is_bus_off(), "recovered after 128 x 11 recessive bits");
+    // Back at 200 Hz within three cycles of the recovery.
+    assert!(count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1, "encoder1 after recovery: {}", count_ms(&bus, ENCODER1, 340, 600));
+}
+
+#[test]
+fn rx_fifo_overrun() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    let bit = bus.bit();
+    // Five frames at once into motor3's FIFO 0 (three fit, RM0008 §24.7.5): overrun.
+    let f = RawFrame { id: WHEEL_SETPOINTS, ide: true, rtr: false, dlc: 8, data: [0; 8] };
+    for i in 0..5 {
+        bus.mcus[3].st.can.receive(&f, bit - 200 + i);
+    }
+    assert_eq!(bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1, 1, "FOVR0");
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert_eq!(bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1, 0, "the driver cleared FOVR0");
+    assert!(count_ms(&bus, ENCODER3, 330, 600).abs_diff(54) <= 1, "motor3 keeps its rate");
+}
+
+#[test]
+fn module_reset_while_the_bus_runs() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    bus.reset_node(1).unwrap();
+    bus.run_until(305 * MS).unwrap();
+    assert_eq!(count_ms(&bus, ENCODER1, 301, 305), 0, "rebooting");
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert!(count_ms(&bus, ENCODER3, 300, 600).abs_diff(60) <= 1, "motor3 undisturbed");
+    // Back within three cycles of its reset: every 5 ms from 340 ms on.
+    assert!(count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1, "encoder1: {}", count_ms(&bus, ENCODER1, 340, 600));
+}
+
+#[test]
+fn frames_queued_at_boot() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    bus.reset_node(3).unwrap();
+    // Step until motor3's bxCAN is in normal mode (its start-up code still runs with
+    // interrupts off), then queue frames with SOF stamps from before its clock started.
+    let mut t = 300 * MS;
+    while bus.mcus[3].st.can.mode() != Mode::Normal {
+        t += MS / 100;
+        bus.run_until(t).unwrap();
+        assert!(t < 320 * MS, "motor3 never enabled CAN");
+    }
+    let bit = bus.bit();
+    let f = RawFrame { id: WHEEL_SETPOINTS, ide: true, rtr: false, dlc: 8, data: [0; 8] };
+    for i in 0..3u64 {
+        bus.mcus[3].st.can.receive(&f, bit.saturating_sub(60_000 + 1_000 * i));
+    }
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert!(count_ms(&bus, ENCODER3, 350, 600).abs_diff(50) <= 1, "encoder3: {}", count_ms(&bus, ENCODER3, 350, 600));
+}
