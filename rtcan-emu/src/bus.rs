@@ -9,7 +9,9 @@ use rtcan_core::timing::exact_bits;
 /// Bits a frame occupies on the bus, intermission included.
 pub fn frame_bits(f: &RawFrame) -> u64 {
     if f.ide && !f.rtr {
-        if let Some(fr) = CanId::from_raw(f.id).and_then(|id| Frame::from_parts(id, f.dlc.min(8), f.data)) {
+        if let Some(fr) =
+            CanId::from_raw(f.id).and_then(|id| Frame::from_parts(id, f.dlc.min(8), f.data))
+        {
             return u64::from(exact_bits(&fr));
         }
     }

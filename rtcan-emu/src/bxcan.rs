@@ -28,7 +28,11 @@ impl RawFrame {
 
     /// The identifier register layout of TIxR/RIxR (§24.9.3): STID/EXID, IDE, RTR.
     fn ir(&self) -> u32 {
-        let idbits = if self.ide { self.id << 3 } else { self.id << 21 };
+        let idbits = if self.ide {
+            self.id << 3
+        } else {
+            self.id << 21
+        };
         idbits | (u32::from(self.ide) << 2) | (u32::from(self.rtr) << 1)
     }
 
@@ -221,7 +225,10 @@ impl BxCan {
         let inak = u32::from(self.mode == Mode::Init);
         let slak = u32::from(self.mode == Mode::Sleep);
         // RX bit (11) reads recessive (1) on an idle bus; SAMP (10) likewise.
-        inak | (slak << 1) | self.msr_irq | (3 << 10) | (u32::from(self.transmitting.is_some()) << 8)
+        inak | (slak << 1)
+            | self.msr_irq
+            | (3 << 10)
+            | (u32::from(self.transmitting.is_some()) << 8)
     }
 
     fn tsr(&self) -> u32 {
@@ -268,7 +275,9 @@ impl BxCan {
         if self.mode != Mode::Normal || self.bus_off {
             return None;
         }
-        let m = (0..3).filter(|&m| self.tx_pending(m)).min_by_key(|&m| self.tx_rank(m))?;
+        let m = (0..3)
+            .filter(|&m| self.tx_pending(m))
+            .min_by_key(|&m| self.tx_rank(m))?;
         let b = self.tx.get(m)?;
         Some((m, RawFrame::from_ir(b.tir, b.tdtr, b.tdlr, b.tdhr)))
     }
@@ -485,9 +494,11 @@ impl BxCan {
     /// Register read at offset `off` from 0x4000_6400 (§24.9).
     pub fn read(&mut self, off: u32) -> Access {
         let tx = |s: &Self, m: usize, r: usize| {
-            s.tx
-                .get(m)
-                .and_then(|b| [b.tir | u32::from(b.pending), b.tdtr, b.tdlr, b.tdhr].get(r).copied())
+            s.tx.get(m).and_then(|b| {
+                [b.tir | u32::from(b.pending), b.tdtr, b.tdlr, b.tdhr]
+                    .get(r)
+                    .copied()
+            })
         };
         Ok(match off {
             0x000 => self.mcr,
@@ -495,9 +506,7 @@ impl BxCan {
             0x008 => self.tsr(),
             0x00C | 0x010 => {
                 let q = self.rx.get(((off - 0x00C) / 4) as usize).ok_or(off)?;
-                (q.slots.len() as u32)
-                    | (u32::from(q.full) << 3)
-                    | (u32::from(q.fovr) << 4)
+                (q.slots.len() as u32) | (u32::from(q.full) << 3) | (u32::from(q.fovr) << 4)
             }
             0x014 => self.ier,
             0x018 => self.esr(),
@@ -525,7 +534,11 @@ impl BxCan {
             0x240..=0x2AF => {
                 let bank = ((off - 0x240) / 8) as usize;
                 let r = ((off % 8) / 4) as usize;
-                self.banks.get(bank).and_then(|b| b.get(r)).copied().ok_or(off)?
+                self.banks
+                    .get(bank)
+                    .and_then(|b| b.get(r))
+                    .copied()
+                    .ok_or(off)?
             }
             _ => return Err(off),
         })
@@ -556,10 +569,7 @@ impl BxCan {
                 }
             }
             0x00C | 0x010 => {
-                let q = self
-                    .rx
-                    .get_mut(((off - 0x00C) / 4) as usize)
-                    .ok_or(off)?;
+                let q = self.rx.get_mut(((off - 0x00C) / 4) as usize).ok_or(off)?;
                 if v & (1 << 3) != 0 {
                     q.full = false;
                 }

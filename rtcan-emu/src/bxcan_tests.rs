@@ -1,4 +1,10 @@
 //! bxCAN model against RM0008 §24 (section cited per test).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 use super::*;
 
 fn ext(id: u32) -> RawFrame {
@@ -47,21 +53,33 @@ fn accept_all(c: &mut BxCan) {
 fn init_and_sleep_handshakes_24_4() {
     let mut c = BxCan::default();
     assert_eq!(c.read(0x004).unwrap() & 3, 0b10, "sleep after reset");
-    assert_eq!(c.read(0x000).unwrap(), 0x0001_0002, "MCR reset value §24.9.2");
+    assert_eq!(
+        c.read(0x000).unwrap(),
+        0x0001_0002,
+        "MCR reset value §24.9.2"
+    );
     c.write(0x000, 1, 100).unwrap();
     assert_eq!(c.read(0x004).unwrap() & 3, 0b01, "INAK set, SLAK clear");
     c.write(0x000, 0, 100).unwrap();
     c.tick(110);
     assert_eq!(c.read(0x004).unwrap() & 1, 1, "still INAK before 11 bits");
     c.tick(111);
-    assert_eq!(c.read(0x004).unwrap() & 3, 0, "normal mode after 11 recessive bits");
+    assert_eq!(
+        c.read(0x004).unwrap() & 3,
+        0,
+        "normal mode after 11 recessive bits"
+    );
     c.write(0x000, 2, 200).unwrap();
     assert_eq!(c.read(0x004).unwrap() & 3, 0b10, "SLEEP request: SLAK");
     // MCR.RESET forces a master reset back to sleep with reset values (§24.9.2).
     c.write(0x01C, 0x001e_0001, 0).unwrap_or(0);
     c.write(0x000, 1 << 15, 300).unwrap();
     assert_eq!(c.read(0x000).unwrap(), 0x0001_0002);
-    assert_eq!(c.read(0x01C).unwrap(), 0x0123_0000, "BTR back to reset value");
+    assert_eq!(
+        c.read(0x01C).unwrap(),
+        0x0123_0000,
+        "BTR back to reset value"
+    );
 }
 
 // §24.9.2 CAN_BTR: writable in initialisation mode only.
@@ -82,7 +100,7 @@ fn btr_only_in_init_24_9_2() {
 fn filter_32bit_mask_24_7_4() {
     let c = running(|c| {
         c.write(0x20C, 1, 0).unwrap();
-        c.write(0x240, (0x00A2_00 << 3) | 4, 0).unwrap(); // ID 0xA200, IDE
+        c.write(0x240, (0xA200 << 3) | 4, 0).unwrap(); // ID 0xA200, IDE
         c.write(0x244, (0x1FFF_FF00 << 3) | 4, 0).unwrap(); // low 8 bits don't care, IDE must match
         c.write(0x21C, 1, 0).unwrap();
     });
@@ -117,8 +135,10 @@ fn filter_16bit_mask_and_list_24_7_4() {
         // Bank 1: 16-bit list of four STIDs, to FIFO 1.
         c.write(0x204, 0b10, 0).unwrap();
         c.write(0x214, 0b10, 0).unwrap();
-        c.write(0x248, (0x311 << 5 << 16) | (0x310 << 5), 0).unwrap();
-        c.write(0x24C, (0x313 << 5 << 16) | (0x312 << 5), 0).unwrap();
+        c.write(0x248, (0x311 << 5 << 16) | (0x310 << 5), 0)
+            .unwrap();
+        c.write(0x24C, (0x313 << 5 << 16) | (0x312 << 5), 0)
+            .unwrap();
         c.write(0x21C, 0b11, 0).unwrap();
     });
     assert_eq!(c.filter(&std_frame(0x100)), Some((0, 0)));
@@ -150,7 +170,11 @@ fn filter_priority_and_numbering_24_7_4() {
     });
     assert_eq!(c.filter(&ext(0x55)), Some((0, 4)), "32-bit list wins");
     assert_eq!(c.filter(&ext(0x66)), Some((0, 5)));
-    assert_eq!(c.filter(&ext(0x77)), Some((0, 3)), "32-bit mask before 16-bit");
+    assert_eq!(
+        c.filter(&ext(0x77)),
+        Some((0, 3)),
+        "32-bit mask before 16-bit"
+    );
     assert_eq!(c.filter(&std_frame(0x7)), Some((0, 3)));
 }
 
@@ -160,18 +184,36 @@ fn filter_priority_and_numbering_24_7_4() {
 fn filter_registers_protected_24_7_4() {
     let mut c = running(accept_all);
     c.write(0x240, 0x1234_5678, 0).unwrap();
-    assert_eq!(c.read(0x240).unwrap(), 0, "active bank, FINIT clear: write ignored");
+    assert_eq!(
+        c.read(0x240).unwrap(),
+        0,
+        "active bank, FINIT clear: write ignored"
+    );
     c.write(0x21C, 0, 0).unwrap();
     c.write(0x240, 0x1234_5678, 0).unwrap();
-    assert_eq!(c.read(0x240).unwrap(), 0x1234_5678, "inactive bank: writable");
+    assert_eq!(
+        c.read(0x240).unwrap(),
+        0x1234_5678,
+        "inactive bank: writable"
+    );
     assert_eq!(c.filter(&ext(1)), None);
 }
 
 fn load(c: &mut BxCan, m: u32, f: &RawFrame) {
     let base = 0x180 + 16 * m;
     c.write(base + 4, u32::from(f.dlc), 0).unwrap();
-    c.write(base + 8, u32::from_le_bytes([f.data[0], f.data[1], f.data[2], f.data[3]]), 0).unwrap();
-    c.write(base + 12, u32::from_le_bytes([f.data[4], f.data[5], f.data[6], f.data[7]]), 0).unwrap();
+    c.write(
+        base + 8,
+        u32::from_le_bytes([f.data[0], f.data[1], f.data[2], f.data[3]]),
+        0,
+    )
+    .unwrap();
+    c.write(
+        base + 12,
+        u32::from_le_bytes([f.data[4], f.data[5], f.data[6], f.data[7]]),
+        0,
+    )
+    .unwrap();
     c.write(base, f.ir() | 1, 0).unwrap();
 }
 
@@ -186,7 +228,11 @@ fn mailbox_priority_by_identifier_24_7_3() {
     load(&mut c, 2, &ext(0x200));
     let tsr = c.read(0x008).unwrap();
     assert_eq!(tsr >> 26 & 7, 0, "none empty");
-    assert_eq!(tsr >> 29 & 7, 0b001, "LOW: mailbox 0 has the lowest priority");
+    assert_eq!(
+        tsr >> 29 & 7,
+        0b001,
+        "LOW: mailbox 0 has the lowest priority"
+    );
     assert_eq!(c.tx_candidate().map(|(m, f)| (m, f.id)), Some((1, 0x100)));
     c.tx_started(1, 500);
     c.tx_finished(1, true, 640);
@@ -198,11 +244,15 @@ fn mailbox_priority_by_identifier_24_7_3() {
     assert_eq!(c.tx_candidate().map(|(m, _)| m), Some(2));
     // A standard frame beats an extended one with the same base ID (arbitration).
     assert!(std_frame(0x1).arbitration_key() < ext(0x1 << 18).arbitration_key());
-    assert!(irq(&c, 0) == false, "TMEIE off: no TX interrupt");
+    assert!(!irq(&c, 0), "TMEIE off: no TX interrupt");
     c.write(0x014, 1, 0).unwrap();
     assert!(irq(&c, 0), "TMEIE and RQCP: TX interrupt line");
     c.write(0x008, 1 << 8, 0).unwrap();
-    assert_eq!(c.read(0x008).unwrap() >> 8 & 0xF, 0, "RQCP write clears RQCP/TXOK/ALST/TERR");
+    assert_eq!(
+        c.read(0x008).unwrap() >> 8 & 0xF,
+        0,
+        "RQCP write clears RQCP/TXOK/ALST/TERR"
+    );
     assert!(!irq(&c, 0));
 }
 
@@ -313,7 +363,10 @@ fn bus_off_and_automatic_recovery_24_7_6() {
     c.tick(1000 + 128 * 11);
     assert!(!c.is_bus_off());
     assert_eq!(c.read(0x018).unwrap(), 0);
-    assert!(c.tx_candidate().is_some(), "pending mailbox goes out after recovery");
+    assert!(
+        c.tx_candidate().is_some(),
+        "pending mailbox goes out after recovery"
+    );
     let mut c = running(accept_all);
     c.inject_tx_errors(32, 0);
     c.tick(100_000);
@@ -326,5 +379,9 @@ fn unknown_registers_are_errors() {
     let mut c = BxCan::default();
     assert_eq!(c.read(0x020), Err(0x020));
     assert_eq!(c.write(0x100, 1, 0), Err(0x100));
-    assert_eq!(c.read(0x2B0), Err(0x2B0), "bank 14 does not exist on the F103");
+    assert_eq!(
+        c.read(0x2B0),
+        Err(0x2B0),
+        "bank 14 does not exist on the F103"
+    );
 }

@@ -226,7 +226,11 @@ impl State {
     fn unknown_access(&mut self, addr: u32, write: bool) {
         self.unknown_count += 1;
         // One record per (address, direction): the first one, with its PC and time.
-        if self.unknown.iter().any(|u| u.addr == addr && u.write == write) {
+        if self
+            .unknown
+            .iter()
+            .any(|u| u.addr == addr && u.write == write)
+        {
             return;
         }
         let rec = UnknownAccess {
@@ -260,14 +264,20 @@ extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *
     // Byte and half-word writes land in their lane of the 32-bit register.
     let lane = 8 * (addr & 3);
     let aligned = addr & !3;
-    let v = if size < 4 && !(0xE000_E400..0xE000_E440).contains(&aligned) && !(0xE000_ED18..0xE000_ED24).contains(&aligned) {
+    let v = if size < 4
+        && !(0xE000_E400..0xE000_E440).contains(&aligned)
+        && !(0xE000_ED18..0xE000_ED24).contains(&aligned)
+    {
         let old = st.read(aligned, 4).unwrap_or(0);
         let mask = if size == 1 { 0xFFu32 } else { 0xFFFF } << lane;
         (old & !mask) | (((v as u32) << lane) & mask)
     } else {
         v as u32
     };
-    let target = if size < 4 && ((0xE000_E400..0xE000_E440).contains(&aligned) || (0xE000_ED18..0xE000_ED24).contains(&aligned)) {
+    let target = if size < 4
+        && ((0xE000_E400..0xE000_E440).contains(&aligned)
+            || (0xE000_ED18..0xE000_ED24).contains(&aligned))
+    {
         addr
     } else {
         aligned
@@ -311,7 +321,7 @@ extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void)
     let st = unsafe { &mut *ud.cast::<State>() };
     st.wfi = true;
     let next = addr as u32 + 3; // past the 16-bit WFI, Thumb bit set
-    // SAFETY: `uc` is the engine calling this hook; PC writes in hooks restart there.
+                                // SAFETY: `uc` is the engine calling this hook; PC writes in hooks restart there.
     unsafe {
         uc_reg_write(uc, REG_PC, (&next as *const u32).cast());
         uc_emu_stop(uc);
@@ -395,7 +405,10 @@ impl Mcu {
         // SAFETY: plain FFI calls with valid out-pointers; `st` is boxed so the address
         // given to Unicorn stays valid for the life of `Mcu`, which closes the engine first.
         unsafe {
-            check("uc_open", uc_open(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS, &mut uc))?;
+            check(
+                "uc_open",
+                uc_open(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS, &mut uc),
+            )?;
             check(
                 "cpu model",
                 uc_ctl(uc, UC_CTL_CPU_MODEL_WRITE, UC_CPU_ARM_CORTEX_M3),
@@ -435,16 +448,22 @@ impl Mcu {
         let ud: *mut c_void = (&mut *st as *mut State).cast();
         // SAFETY: see above.
         unsafe {
-            check("map flash", uc_mem_map(uc, u64::from(FLASH_BASE), FLASH_SIZE as usize, UC_PROT_ALL))?;
+            check(
+                "map flash",
+                uc_mem_map(uc, u64::from(FLASH_BASE), FLASH_SIZE as usize, UC_PROT_ALL),
+            )?;
             // Boot from main flash: aliased at 0 (RM0008 §3.4); a copy suffices, flash is read-only.
-            check("map alias", uc_mem_map(uc, 0, FLASH_SIZE as usize, UC_PROT_ALL))?;
-            check("map sram", uc_mem_map(uc, u64::from(SRAM_BASE), SRAM_SIZE as usize, UC_PROT_ALL))?;
+            check(
+                "map alias",
+                uc_mem_map(uc, 0, FLASH_SIZE as usize, UC_PROT_ALL),
+            )?;
+            check(
+                "map sram",
+                uc_mem_map(uc, u64::from(SRAM_BASE), SRAM_SIZE as usize, UC_PROT_ALL),
+            )?;
             // Peripherals and system: the offset passed to the callbacks is made absolute
             // by mapping each region at its base and adding the base back (`region` fns).
-            for &(base, size) in &[
-                (0x4000_0000u64, 0x3_0000usize),
-                (0xE000_0000, 0x10_0000),
-            ] {
+            for &(base, size) in &[(0x4000_0000u64, 0x3_0000usize), (0xE000_0000, 0x10_0000)] {
                 let (r, w): (MmioRead, MmioWrite) = if base == 0x4000_0000 {
                     (read_apb, write_apb)
                 } else {
@@ -454,13 +473,56 @@ impl Mcu {
             }
             // Bit-band aliases (Cortex-M3 TRM §3.7, RM0008 §2.3.2): a word per bit of
             // the peripheral and SRAM regions.
-            check("bitband periph", uc_mmio_map(uc, 0x4200_0000, 0x200_0000, read_bb_periph, ud, write_bb_periph, ud))?;
-            check("bitband sram", uc_mmio_map(uc, 0x2200_0000, 0x200_0000, read_bb_sram, ud, write_bb_sram, ud))?;
-            check("mmio dbg", uc_mmio_map(uc, 0xE004_2000, 0x1000, read_dbg, ud, write_dbg, ud)).ok();
+            check(
+                "bitband periph",
+                uc_mmio_map(
+                    uc,
+                    0x4200_0000,
+                    0x200_0000,
+                    read_bb_periph,
+                    ud,
+                    write_bb_periph,
+                    ud,
+                ),
+            )?;
+            check(
+                "bitband sram",
+                uc_mmio_map(
+                    uc,
+                    0x2200_0000,
+                    0x200_0000,
+                    read_bb_sram,
+                    ud,
+                    write_bb_sram,
+                    ud,
+                ),
+            )?;
+            check(
+                "mmio dbg",
+                uc_mmio_map(uc, 0xE004_2000, 0x1000, read_dbg, ud, write_dbg, ud),
+            )
+            .ok();
             let mut h: uc_hook = 0;
-            check("hook code", uc_hook_add(uc, &mut h, UC_HOOK_CODE, on_code as *mut c_void, ud, 1, 0))?;
-            check("hook intr", uc_hook_add(uc, &mut h, UC_HOOK_INTR, on_intr as *mut c_void, ud, 1, 0))?;
-            check("hook unmapped", uc_hook_add(uc, &mut h, UC_HOOK_MEM_UNMAPPED, on_unmapped as *mut c_void, ud, 1, 0))?;
+            check(
+                "hook code",
+                uc_hook_add(uc, &mut h, UC_HOOK_CODE, on_code as *mut c_void, ud, 1, 0),
+            )?;
+            check(
+                "hook intr",
+                uc_hook_add(uc, &mut h, UC_HOOK_INTR, on_intr as *mut c_void, ud, 1, 0),
+            )?;
+            check(
+                "hook unmapped",
+                uc_hook_add(
+                    uc,
+                    &mut h,
+                    UC_HOOK_MEM_UNMAPPED,
+                    on_unmapped as *mut c_void,
+                    ud,
+                    1,
+                    0,
+                ),
+            )?;
         }
         // WFI sites (0xBF30 at half-word boundaries of the code): a hook each, to sleep.
         for seg in &image {
@@ -473,7 +535,12 @@ impl Mcu {
                 let a = u64::from(seg.addr) + 2 * i as u64;
                 let mut h: uc_hook = 0;
                 // SAFETY: see above.
-                unsafe { check("hook wfi", uc_hook_add(uc, &mut h, UC_HOOK_CODE, hook, ud, a, a))? };
+                unsafe {
+                    check(
+                        "hook wfi",
+                        uc_hook_add(uc, &mut h, UC_HOOK_CODE, hook, ud, a, a),
+                    )?
+                };
             }
         }
         let mut mcu = Mcu {
@@ -551,12 +618,31 @@ impl Mcu {
         let zero = vec![0u8; SRAM_SIZE as usize];
         // SAFETY: live engine; buffers are valid for their lengths.
         unsafe {
-            check("clear sram", uc_mem_write(self.uc, u64::from(SRAM_BASE), zero.as_ptr().cast(), zero.len()))?;
+            check(
+                "clear sram",
+                uc_mem_write(
+                    self.uc,
+                    u64::from(SRAM_BASE),
+                    zero.as_ptr().cast(),
+                    zero.len(),
+                ),
+            )?;
             for seg in &self.image {
-                check("load", uc_mem_write(self.uc, u64::from(seg.addr), seg.bytes.as_ptr().cast(), seg.bytes.len()))?;
+                check(
+                    "load",
+                    uc_mem_write(
+                        self.uc,
+                        u64::from(seg.addr),
+                        seg.bytes.as_ptr().cast(),
+                        seg.bytes.len(),
+                    ),
+                )?;
                 if seg.addr >= FLASH_BASE && seg.addr < FLASH_BASE + FLASH_SIZE {
                     let alias = u64::from(seg.addr - FLASH_BASE);
-                    check("load alias", uc_mem_write(self.uc, alias, seg.bytes.as_ptr().cast(), seg.bytes.len()))?;
+                    check(
+                        "load alias",
+                        uc_mem_write(self.uc, alias, seg.bytes.as_ptr().cast(), seg.bytes.len()),
+                    )?;
                 }
             }
         }
@@ -668,7 +754,10 @@ impl Mcu {
         let sp = self.reg(REG_SP);
         let v: Vec<u32> = (0..8).map(|i| self.mem_read_u32(sp + 4 * i)).collect();
         let get = |i: usize| v.get(i).copied().unwrap_or(0);
-        for (i, r) in [REG_R0, REG_R0 + 1, REG_R0 + 2, REG_R0 + 3, REG_R12, REG_LR].iter().enumerate() {
+        for (i, r) in [REG_R0, REG_R0 + 1, REG_R0 + 2, REG_R0 + 3, REG_R12, REG_LR]
+            .iter()
+            .enumerate()
+        {
             self.set_reg(*r, get(i));
         }
         self.set_reg(REG_PC, get(6) & !1);
@@ -733,14 +822,20 @@ impl Mcu {
             if let Some(f) = &self.st.fault {
                 return Err(f.clone());
             }
-            if self.st.iwdg.deadline.is_some_and(|d| d <= self.st.now()) || self.st.scs.reset_request {
+            if self.st.iwdg.deadline.is_some_and(|d| d <= self.st.now())
+                || self.st.scs.reset_request
+            {
                 self.reset().map_err(|e| format!("{e:?}"))?;
                 continue;
             }
             self.raise_irqs();
             self.take_pending();
             if self.st.wfi {
-                let next = self.next_event().unwrap_or(until).min(until).max(self.st.now() + 1);
+                let next = self
+                    .next_event()
+                    .unwrap_or(until)
+                    .min(until)
+                    .max(self.st.now() + 1);
                 let now = self.st.now();
                 self.st.add_time(next - now);
                 self.st.asleep_ps += next - now;
@@ -764,7 +859,10 @@ impl Mcu {
             }
             if e != 0 && !self.st.wfi {
                 let pc = self.reg(REG_PC);
-                return Err(format!("{}: CPU fault {e} at pc {pc:#010x} after {} instructions", self.name, self.st.instructions));
+                return Err(format!(
+                    "{}: CPU fault {e} at pc {pc:#010x} after {} instructions",
+                    self.name, self.st.instructions
+                ));
             }
         }
         Ok(())
@@ -815,7 +913,11 @@ extern "C" fn write_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, v: u64,
     let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(0x4000_0000, off);
     let r = st.read(addr, 4).and_then(|old| {
-        let new = if v & 1 != 0 { old | (1 << bit) } else { old & !(1 << bit) };
+        let new = if v & 1 != 0 {
+            old | (1 << bit)
+        } else {
+            old & !(1 << bit)
+        };
         st.write(addr, 4, new)
     });
     if let Err(a) = r {
@@ -837,7 +939,11 @@ extern "C" fn write_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, v: u64, _u
     // SAFETY: as in `read_bb_sram`.
     unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
     let old = u32::from_le_bytes(b);
-    let new = if v & 1 != 0 { old | (1 << bit) } else { old & !(1 << bit) };
+    let new = if v & 1 != 0 {
+        old | (1 << bit)
+    } else {
+        old & !(1 << bit)
+    };
     let nb = new.to_le_bytes();
     // SAFETY: as in `read_bb_sram`.
     unsafe { uc_mem_write(uc, u64::from(addr), nb.as_ptr().cast(), 4) };

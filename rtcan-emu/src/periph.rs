@@ -158,7 +158,11 @@ impl Rcc {
             0x18 => self.apb2enr = v,
             0x1C => self.apb1enr = v,
             0x20 => self.bdcr = v,
-            0x24 => self.csr = (self.csr & 0xFC00_0000 & !(v & (1 << 24))) | (v & 1) | u32::from(v & 1 != 0) << 1,
+            0x24 => {
+                self.csr = (self.csr & 0xFC00_0000 & !(v & (1 << 24)))
+                    | (v & 1)
+                    | u32::from(v & 1 != 0) << 1
+            }
             _ => return Err(off),
         }
         Ok(0)
@@ -273,7 +277,7 @@ pub struct Afio {
 impl Afio {
     pub fn read(&self, off: u32) -> Access {
         match off {
-            0x00..=0x1C if off % 4 == 0 && off != 0x18 => {
+            0x00..=0x1C if off.is_multiple_of(4) && off != 0x18 => {
                 self.regs.get((off / 4) as usize).copied().ok_or(off)
             }
             _ => Err(off),
@@ -282,7 +286,7 @@ impl Afio {
 
     pub fn write(&mut self, off: u32, v: u32) -> Access {
         match off {
-            0x00..=0x1C if off % 4 == 0 && off != 0x18 => {
+            0x00..=0x1C if off.is_multiple_of(4) && off != 0x18 => {
                 // MAPR SWJ_CFG (bits 26:24) is write-only (§9.4.2).
                 let v = if off == 4 { v & !(7 << 24) } else { v };
                 let r = self.regs.get_mut((off / 4) as usize).ok_or(off)?;
@@ -474,12 +478,20 @@ impl Tim2 {
             0x0C => self.dier,
             0x10 => self.sr,
             0x14 => 0,
-            0x18 | 0x1C => self.ccmr.get(((off - 0x18) / 4) as usize).copied().unwrap_or(0),
+            0x18 | 0x1C => self
+                .ccmr
+                .get(((off - 0x18) / 4) as usize)
+                .copied()
+                .unwrap_or(0),
             0x20 => self.ccer,
             0x24 => self.cnt,
             0x28 => self.psc,
             0x2C => self.arr,
-            0x34..=0x40 => self.ccr.get(((off - 0x34) / 4) as usize).copied().unwrap_or(0),
+            0x34..=0x40 => self
+                .ccr
+                .get(((off - 0x34) / 4) as usize)
+                .copied()
+                .unwrap_or(0),
             0x48 | 0x4C => 0,
             _ => return Err(off),
         })
@@ -603,7 +615,9 @@ pub struct Usart {
 impl Usart {
     pub fn read(&mut self, off: u32) -> Access {
         Ok(match off {
-            0x00 => 0xC0 | (u32::from(!self.rx.is_empty()) << 5) | (u32::from(self.ore) << 3) | 0x10,
+            0x00 => {
+                0xC0 | (u32::from(!self.rx.is_empty()) << 5) | (u32::from(self.ore) << 3) | 0x10
+            }
             0x04 => {
                 self.ore = false;
                 u32::from(self.rx.pop_front().unwrap_or(0))
@@ -653,11 +667,7 @@ impl Dma {
             0x08..=0x8F => {
                 let c = ((off - 0x08) / 20) as usize;
                 let r = (((off - 0x08) % 20) / 4) as usize;
-                self.ch
-                    .get(c)
-                    .and_then(|ch| ch.get(r))
-                    .copied()
-                    .ok_or(off)
+                self.ch.get(c).and_then(|ch| ch.get(r)).copied().ok_or(off)
             }
             _ => Err(off),
         }
@@ -730,11 +740,23 @@ impl Adc {
             0x00 => self.sr,
             0x04 => self.cr1,
             0x08 => self.cr2,
-            0x0C | 0x10 => self.smpr.get(((off - 0x0C) / 4) as usize).copied().unwrap_or(0),
-            0x14..=0x20 => self.jofr.get(((off - 0x14) / 4) as usize).copied().unwrap_or(0),
+            0x0C | 0x10 => self
+                .smpr
+                .get(((off - 0x0C) / 4) as usize)
+                .copied()
+                .unwrap_or(0),
+            0x14..=0x20 => self
+                .jofr
+                .get(((off - 0x14) / 4) as usize)
+                .copied()
+                .unwrap_or(0),
             0x24 => self.htr,
             0x28 => self.ltr,
-            0x2C..=0x34 => self.sqr.get(((off - 0x2C) / 4) as usize).copied().unwrap_or(0),
+            0x2C..=0x34 => self
+                .sqr
+                .get(((off - 0x2C) / 4) as usize)
+                .copied()
+                .unwrap_or(0),
             0x38 => self.jsqr,
             0x3C..=0x48 => 0,
             // Reading DR clears EOC (§11.12.1).

@@ -1,4 +1,10 @@
 //! RCC, TIM2..4, ADC1, IWDG against RM0008 (section cited per test).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 use super::*;
 
 // §7.3.1/§7.3.2: HSE on → HSERDY; PLL from HSE ×9 → PLLRDY; SW = PLL → SWS = PLL;
@@ -11,15 +17,29 @@ fn rcc_clock_tree_7_3() {
     assert_ne!(r.read(0).unwrap() & (1 << 17), 0, "HSERDY");
     r.write(0x04, (1 << 16) | (7 << 18) | (4 << 8)).unwrap();
     r.write(0x04, (1 << 16) | (7 << 18) | (4 << 8) | 2).unwrap();
-    assert_eq!(r.read(4).unwrap() >> 2 & 3, 0, "PLL not ready: SWS stays HSI");
+    assert_eq!(
+        r.read(4).unwrap() >> 2 & 3,
+        0,
+        "PLL not ready: SWS stays HSI"
+    );
     r.write(0x00, 0x83 | (1 << 16) | (1 << 24)).unwrap();
     assert_ne!(r.read(0).unwrap() & (1 << 25), 0, "PLLRDY");
     r.write(0x04, (1 << 16) | (7 << 18) | (4 << 8) | 2).unwrap();
     assert_eq!(r.read(4).unwrap() >> 2 & 3, 2);
-    assert_eq!((r.sysclk(), r.pclk1(), r.tim2clk()), (72_000_000, 36_000_000, 72_000_000));
-    let mut dead = Rcc { hse_dead: true, ..Rcc::default() };
+    assert_eq!(
+        (r.sysclk(), r.pclk1(), r.tim2clk()),
+        (72_000_000, 36_000_000, 72_000_000)
+    );
+    let mut dead = Rcc {
+        hse_dead: true,
+        ..Rcc::default()
+    };
     dead.write(0x00, 1 << 16).unwrap();
-    assert_eq!(dead.read(0).unwrap() & (1 << 17), 0, "dead crystal: no HSERDY");
+    assert_eq!(
+        dead.read(0).unwrap() & (1 << 17),
+        0,
+        "dead crystal: no HSERDY"
+    );
     assert_eq!(r.read(0x30), Err(0x30));
 }
 
@@ -75,8 +95,13 @@ fn adc_single_conversion_11_3() {
     a.input[2] = 1234;
     a.write(0x08, 1).unwrap();
     a.write(0x34, 2).unwrap();
-    a.write(0x08, 1 | (7 << 17) | (1 << 20) | (1 << 22)).unwrap();
-    assert_eq!(a.read(0x08).unwrap() & (1 << 22), 0, "SWSTART cleared at start");
+    a.write(0x08, 1 | (7 << 17) | (1 << 20) | (1 << 22))
+        .unwrap();
+    assert_eq!(
+        a.read(0x08).unwrap() & (1 << 22),
+        0,
+        "SWSTART cleared at start"
+    );
     assert_eq!(a.read(0x00).unwrap() & 2, 2, "EOC");
     assert_eq!(a.read(0x4C).unwrap(), 1234);
     assert_eq!(a.read(0x00).unwrap() & 2, 0, "DR read clears EOC");

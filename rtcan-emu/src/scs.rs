@@ -99,7 +99,12 @@ impl Scs {
             1 => -3,
             2 => -2,
             3 => -1,
-            4..=15 => i16::from(self.sys_prio.get(usize::from(exc) - 4).copied().unwrap_or(0)),
+            4..=15 => i16::from(
+                self.sys_prio
+                    .get(usize::from(exc) - 4)
+                    .copied()
+                    .unwrap_or(0),
+            ),
             _ => i16::from(
                 self.irq_prio
                     .get(usize::from(exc) - 16)
@@ -301,7 +306,7 @@ impl Scs {
                     acc | u32::from(self.sys_prio.get(first + i).copied().unwrap_or(0)) << (8 * i)
                 })
             }
-            0xD24 => 0, // SHCSR
+            0xD24 => 0,                                         // SHCSR
             0xD28 | 0xD2C | 0xD30 | 0xD34 | 0xD38 | 0xD3C => 0, // fault status/address: no faults modelled
             0xDFC => self.demcr,
             _ => return Err(off),

@@ -1,4 +1,10 @@
 //! NVIC/SCB/SysTick against the ARMv7-M ARM (section cited per test).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 use super::*;
 
 // B3.4.9 / RM0008 §10.1.1: 4 priority bits; B1.5.4: lower value preempts, equal
@@ -7,7 +13,8 @@ use super::*;
 fn priorities_basepri_primask_b1_5_4() {
     let mut s = Scs::default();
     // Enable IRQ 28 (TIM2) and IRQ 20 (CAN RX0), priorities 0x20 and 0x20; IRQ 7 at 0xF0.
-    s.write(0x100, (1 << 28) | (1 << 20) | (1 << 7), 4, 0).unwrap();
+    s.write(0x100, (1 << 28) | (1 << 20) | (1 << 7), 4, 0)
+        .unwrap();
     s.write(0x41C, 0x20, 1, 0).unwrap(); // IPR byte 28
     s.write(0x414, 0x2F, 1, 0).unwrap(); // IPR byte 20: low nibble not implemented
     assert_eq!(s.read(0x414, 0).unwrap() & 0xFF, 0x20);
@@ -15,22 +22,36 @@ fn priorities_basepri_primask_b1_5_4() {
     s.set_pending(28);
     s.set_pending(20);
     s.set_pending(7);
-    assert_eq!(s.next_exception(256), Some(16 + 20), "same priority: lower number first");
+    assert_eq!(
+        s.next_exception(256),
+        Some(16 + 20),
+        "same priority: lower number first"
+    );
     // BASEPRI 0x20 masks priority 0x20 and lower urgency.
     let exec = s.execution_priority(false, false, 0x20);
     assert_eq!(s.next_exception(exec), None);
     let exec = s.execution_priority(false, false, 0x30);
     assert_eq!(s.next_exception(exec), Some(36));
-    assert_eq!(s.next_exception(s.execution_priority(true, false, 0)), None, "PRIMASK");
+    assert_eq!(
+        s.next_exception(s.execution_priority(true, false, 0)),
+        None,
+        "PRIMASK"
+    );
     // A disabled IRQ never fires (ICER, B3.4.5).
     s.write(0x180, 1 << 20, 4, 0).unwrap();
     assert_eq!(s.next_exception(256), Some(16 + 28));
     // Nesting: while 28 is active, only a higher-priority (lower value) exception preempts.
     s.activate(16 + 28);
     assert!(!s.is_pending(28));
-    assert_eq!(s.next_exception(s.execution_priority(false, false, 0)), None);
+    assert_eq!(
+        s.next_exception(s.execution_priority(false, false, 0)),
+        None
+    );
     assert_eq!(s.deactivate(), Some(16 + 28));
-    assert_eq!(s.next_exception(s.execution_priority(false, false, 0)), Some(16 + 7));
+    assert_eq!(
+        s.next_exception(s.execution_priority(false, false, 0)),
+        Some(16 + 7)
+    );
 }
 
 // B3.2.6 AIRCR.PRIGROUP: with PRIGROUP = 5 only bits [7:6] preempt; sub-priority orders.
@@ -44,7 +65,11 @@ fn priority_grouping_b3_2_6() {
     s.write(0xD0C, 0x05FA_0500, 4, 0).unwrap();
     s.activate(16);
     s.set_pending(1);
-    assert_eq!(s.next_exception(s.execution_priority(false, false, 0)), None, "same group 0x40");
+    assert_eq!(
+        s.next_exception(s.execution_priority(false, false, 0)),
+        None,
+        "same group 0x40"
+    );
 }
 
 // B3.3: SysTick counts down from RVR, COUNTFLAG and the exception at 0, reload next tick;
@@ -60,7 +85,11 @@ fn systick_b3_3() {
     assert_eq!(s.read(0x018, 1).unwrap(), 99);
     assert!(s.sync_systick(100));
     assert_eq!(s.read(0x010, 100).unwrap() >> 16 & 1, 1, "COUNTFLAG");
-    assert_eq!(s.read(0x010, 100).unwrap() >> 16 & 1, 0, "cleared by the read");
+    assert_eq!(
+        s.read(0x010, 100).unwrap() >> 16 & 1,
+        0,
+        "cleared by the read"
+    );
     assert_eq!(s.next_exception(256), Some(EXC_SYSTICK));
     s.write(0x010, 0b011, 4, 100).unwrap(); // HCLK/8
     assert_eq!(s.systick_due_in(), Some(800));

@@ -48,11 +48,23 @@ extern "C" {
         write_cb: MmioWrite,
         user_data_write: *mut c_void,
     ) -> uc_err;
-    pub fn uc_mem_write(uc: *mut uc_engine, address: u64, bytes: *const c_void, size: usize) -> uc_err;
-    pub fn uc_mem_read(uc: *mut uc_engine, address: u64, bytes: *mut c_void, size: usize) -> uc_err;
+    pub fn uc_mem_write(
+        uc: *mut uc_engine,
+        address: u64,
+        bytes: *const c_void,
+        size: usize,
+    ) -> uc_err;
+    pub fn uc_mem_read(uc: *mut uc_engine, address: u64, bytes: *mut c_void, size: usize)
+        -> uc_err;
     pub fn uc_reg_write(uc: *mut uc_engine, regid: i32, value: *const c_void) -> uc_err;
     pub fn uc_reg_read(uc: *mut uc_engine, regid: i32, value: *mut c_void) -> uc_err;
-    pub fn uc_emu_start(uc: *mut uc_engine, begin: u64, until: u64, timeout: u64, count: usize) -> uc_err;
+    pub fn uc_emu_start(
+        uc: *mut uc_engine,
+        begin: u64,
+        until: u64,
+        timeout: u64,
+        count: usize,
+    ) -> uc_err;
     pub fn uc_emu_stop(uc: *mut uc_engine) -> uc_err;
     pub fn uc_hook_add(
         uc: *mut uc_engine,

@@ -1,5 +1,11 @@
 //! The six Triskar2 release images (`cd examples/triskar2 && cargo build --release`) on
 //! six emulated STM32F103 on one emulated bus: boot, run, and survive bus faults.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 use rtcan_emu::bus::Bus;
 use rtcan_emu::bxcan::{Mode, RawFrame};
 use rtcan_emu::mcu::{Mcu, Timing};
@@ -16,7 +22,10 @@ fn image(name: &str) -> Vec<u8> {
         .join("../examples/triskar2/target/thumbv7m-none-eabi/release")
         .join(name);
     std::fs::read(&p).unwrap_or_else(|e| {
-        panic!("{}: {e} (build the images first: cd examples/triskar2 && cargo build --release)", p.display())
+        panic!(
+            "{}: {e} (build the images first: cd examples/triskar2 && cargo build --release)",
+            p.display()
+        )
     })
 }
 
@@ -28,14 +37,14 @@ fn robot() -> Bus {
     Bus::new(mcus, BIT)
 }
 
-/// Frames sent by `node` with SOF in [from, to) bit times.
-fn sent(bus: &Bus, node: usize, from: u64, to: u64) -> usize {
-    bus.log.iter().filter(|(n, _, sof)| *n == node && (from..to).contains(sof)).count()
-}
-
 fn no_unknown(bus: &Bus) {
     for m in &bus.mcus {
-        assert_eq!(m.st.unknown, vec![], "{}: unknown register accesses", m.name);
+        assert_eq!(
+            m.st.unknown,
+            vec![],
+            "{}: unknown register accesses",
+            m.name
+        );
         assert_eq!(m.st.fault, None, "{}", m.name);
     }
 }
@@ -43,19 +52,30 @@ fn no_unknown(bus: &Bus) {
 /// The gateway's cycle: SOF distance of its first two frames with ID < 0x100 (the
 /// cycle-start reference, whose ID counts the cycles).
 fn cycle_bits(bus: &Bus) -> u64 {
-    let refs: Vec<u64> = bus.log.iter().filter(|(n, f, _)| *n == 0 && f.id < 0x100).map(|(_, _, s)| *s).collect();
+    let refs: Vec<u64> = bus
+        .log
+        .iter()
+        .filter(|(n, f, _)| *n == 0 && f.id < 0x100)
+        .map(|(_, _, s)| *s)
+        .collect();
     assert!(refs.len() >= 2, "gateway sends its cycle reference");
     refs[1] - refs[0]
 }
 
 /// First SOF (bit time) of a frame with identifier `id`.
 fn first_of(bus: &Bus, id: u32) -> Option<u64> {
-    bus.log.iter().find(|(_, f, _)| f.id == id).map(|(_, _, s)| *s)
+    bus.log
+        .iter()
+        .find(|(_, f, _)| f.id == id)
+        .map(|(_, _, s)| *s)
 }
 
 /// Frames with identifier `id` and SOF in [from, to) bit times.
 fn count_of(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
-    bus.log.iter().filter(|(_, f, s)| f.id == id && (from..to).contains(s)).count() as u64
+    bus.log
+        .iter()
+        .filter(|(_, f, s)| f.id == id && (from..to).contains(s))
+        .count() as u64
 }
 
 // Identifiers of the HRT topics as the images send them (checked against robot.toml's
@@ -79,14 +99,29 @@ fn six_images_boot_and_sync_within_three_cycles() {
         assert_eq!(m.st.bit_ps, BIT, "{}: 1 Mbit/s", m.name);
     }
     let cycle = cycle_bits(&bus);
-    assert_eq!(cycle, 10_001, "10 ms cycle (robot.toml) measured SOF to SOF");
+    assert_eq!(
+        cycle, 10_001,
+        "10 ms cycle (robot.toml) measured SOF to SOF"
+    );
     let first_ref = bus.log.first().map(|(_, _, s)| *s).unwrap();
-    assert!(first_ref < 1_000, "gateway on the bus within 1 ms of power-on: {first_ref}");
+    assert!(
+        first_ref < 1_000,
+        "gateway on the bus within 1 ms of power-on: {first_ref}"
+    );
     // Each publisher's first HRT frame: within 3 cycles of the first reference, plus its
     // own period for topics slower than the cycle (it is due once per period).
-    for (id, period_bits) in [(ENCODER1, 0), (WHEEL_SETPOINTS, 0), (ENCODER3, 0), (ODOMETRY, 20_000), (PROXIMITY, 40_000)] {
+    for (id, period_bits) in [
+        (ENCODER1, 0),
+        (WHEEL_SETPOINTS, 0),
+        (ENCODER3, 0),
+        (ODOMETRY, 20_000),
+        (PROXIMITY, 40_000),
+    ] {
         let at = first_of(&bus, id).unwrap_or(u64::MAX);
-        assert!(at < first_ref + 3 * cycle + period_bits, "{id:#x} first at bit {at}");
+        assert!(
+            at < first_ref + 3 * cycle + period_bits,
+            "{id:#x} first at bit {at}"
+        );
     }
 }
 
@@ -100,16 +135,34 @@ fn five_seconds_of_triskar2() {
     // Rates of robot.toml over the last four seconds: each HRT message in every one of its
     // periods (±1 at the window edges).
     let (from, to) = (1_000 * MS / BIT, 5_000 * MS / BIT);
-    for (id, hz) in [(ENCODER1, 200), (WHEEL_SETPOINTS, 100), (WHEEL_SETPOINTS + 1, 100), (ENCODER3, 200), (ODOMETRY, 50), (ODOMETRY + 3, 50), (PROXIMITY, 25)] {
+    for (id, hz) in [
+        (ENCODER1, 200),
+        (WHEEL_SETPOINTS, 100),
+        (WHEEL_SETPOINTS + 1, 100),
+        (ENCODER3, 200),
+        (ODOMETRY, 50),
+        (ODOMETRY + 3, 50),
+        (PROXIMITY, 25),
+    ] {
         let n = count_of(&bus, id, from, to);
-        assert!(n.abs_diff(4 * hz) <= 1, "{id:#x}: {n} frames in 4 s, {hz} Hz expected");
+        assert!(
+            n.abs_diff(4 * hz) <= 1,
+            "{id:#x}: {n} frames in 4 s, {hz} Hz expected"
+        );
     }
-    let refs = bus.log.iter().filter(|(n, f, s)| *n == 0 && f.id < 0x1000 && (from..to).contains(s)).count();
+    let refs = bus
+        .log
+        .iter()
+        .filter(|(n, f, s)| *n == 0 && f.id < 0x1000 && (from..to).contains(s))
+        .count();
     assert!(refs.abs_diff(400) <= 1, "cycle references: {refs}");
     for m in &bus.mcus {
         assert_eq!(m.st.can.tec, 0, "{}: no transmit errors", m.name);
     }
-    eprintln!("5 s emulated in {wall:.2} s wall: {:.2}x real time", 5.0 / wall);
+    eprintln!(
+        "5 s emulated in {wall:.2} s wall: {:.2}x real time",
+        5.0 / wall
+    );
 }
 
 /// Frames of `id` in [from, to) ms.
@@ -128,15 +181,32 @@ fn bus_off_and_recovery() {
     assert!(bus.mcus[1].st.can.is_bus_off());
     bus.run_until(310 * MS).unwrap();
     // Silent until the automatic recovery after 128 x 11 recessive bits.
-    assert_eq!(count_of(&bus, ENCODER1, bit, bit + 128 * 11), 0, "bus-off: motor1 silent");
-    assert!(count_of(&bus, ENCODER1, bit + 128 * 11, bit + 10_000) >= 1, "motor1 back");
+    assert_eq!(
+        count_of(&bus, ENCODER1, bit, bit + 128 * 11),
+        0,
+        "bus-off: motor1 silent"
+    );
+    assert!(
+        count_of(&bus, ENCODER1, bit + 128 * 11, bit + 10_000) >= 1,
+        "motor1 back"
+    );
     assert!(count_ms(&bus, ENCODER3, 301, 310) >= 1, "the others go on");
     bus.run_until(600 * MS).unwrap();
     no_unknown(&bus);
-    assert!(mcr & (1 << 6) != 0, "the board enables automatic bus-off management (ABOM)");
-    assert!(!bus.mcus[1].st.can.is_bus_off(), "recovered after 128 x 11 recessive bits");
+    assert!(
+        mcr & (1 << 6) != 0,
+        "the board enables automatic bus-off management (ABOM)"
+    );
+    assert!(
+        !bus.mcus[1].st.can.is_bus_off(),
+        "recovered after 128 x 11 recessive bits"
+    );
     // Back at 200 Hz within three cycles of the recovery.
-    assert!(count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1, "encoder1 after recovery: {}", count_ms(&bus, ENCODER1, 340, 600));
+    assert!(
+        count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1,
+        "encoder1 after recovery: {}",
+        count_ms(&bus, ENCODER1, 340, 600)
+    );
 }
 
 #[test]
@@ -145,15 +215,28 @@ fn rx_fifo_overrun() {
     bus.run_until(300 * MS).unwrap();
     let bit = bus.bit();
     // Five frames at once into motor3's FIFO 0 (three fit, RM0008 §24.7.5): overrun.
-    let f = RawFrame { id: WHEEL_SETPOINTS, ide: true, rtr: false, dlc: 8, data: [0; 8] };
+    let f = RawFrame {
+        id: WHEEL_SETPOINTS,
+        ide: true,
+        rtr: false,
+        dlc: 8,
+        data: [0; 8],
+    };
     for i in 0..5 {
         bus.mcus[3].st.can.receive(&f, bit - 200 + i);
     }
     assert_eq!(bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1, 1, "FOVR0");
     bus.run_until(600 * MS).unwrap();
     no_unknown(&bus);
-    assert_eq!(bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1, 0, "the driver cleared FOVR0");
-    assert!(count_ms(&bus, ENCODER3, 330, 600).abs_diff(54) <= 1, "motor3 keeps its rate");
+    assert_eq!(
+        bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1,
+        0,
+        "the driver cleared FOVR0"
+    );
+    assert!(
+        count_ms(&bus, ENCODER3, 330, 600).abs_diff(54) <= 1,
+        "motor3 keeps its rate"
+    );
 }
 
 #[test]
@@ -165,9 +248,16 @@ fn module_reset_while_the_bus_runs() {
     assert_eq!(count_ms(&bus, ENCODER1, 301, 305), 0, "rebooting");
     bus.run_until(600 * MS).unwrap();
     no_unknown(&bus);
-    assert!(count_ms(&bus, ENCODER3, 300, 600).abs_diff(60) <= 1, "motor3 undisturbed");
+    assert!(
+        count_ms(&bus, ENCODER3, 300, 600).abs_diff(60) <= 1,
+        "motor3 undisturbed"
+    );
     // Back within three cycles of its reset: every 5 ms from 340 ms on.
-    assert!(count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1, "encoder1: {}", count_ms(&bus, ENCODER1, 340, 600));
+    assert!(
+        count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1,
+        "encoder1: {}",
+        count_ms(&bus, ENCODER1, 340, 600)
+    );
 }
 
 #[test]
@@ -184,11 +274,24 @@ fn frames_queued_at_boot() {
         assert!(t < 320 * MS, "motor3 never enabled CAN");
     }
     let bit = bus.bit();
-    let f = RawFrame { id: WHEEL_SETPOINTS, ide: true, rtr: false, dlc: 8, data: [0; 8] };
+    let f = RawFrame {
+        id: WHEEL_SETPOINTS,
+        ide: true,
+        rtr: false,
+        dlc: 8,
+        data: [0; 8],
+    };
     for i in 0..3u64 {
-        bus.mcus[3].st.can.receive(&f, bit.saturating_sub(60_000 + 1_000 * i));
+        bus.mcus[3]
+            .st
+            .can
+            .receive(&f, bit.saturating_sub(60_000 + 1_000 * i));
     }
     bus.run_until(600 * MS).unwrap();
     no_unknown(&bus);
-    assert!(count_ms(&bus, ENCODER3, 350, 600).abs_diff(50) <= 1, "encoder3: {}", count_ms(&bus, ENCODER3, 350, 600));
+    assert!(
+        count_ms(&bus, ENCODER3, 350, 600).abs_diff(50) <= 1,
+        "encoder3: {}",
+        count_ms(&bus, ENCODER3, 350, 600)
+    );
 }
