@@ -17,10 +17,16 @@ const MS: u64 = 1_000_000_000;
 /// Bit time at 1 Mbit/s, ps.
 const BIT: u64 = 1_000_000;
 
+/// The image of module `name`: from `$RTCAN_EMU_IMAGES` if set (a directory of ELF files),
+/// else from the release build of examples/triskar2.
 fn image(name: &str) -> Vec<u8> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../examples/triskar2/target/thumbv7m-none-eabi/release")
-        .join(name);
+    let dir = std::env::var_os("RTCAN_EMU_IMAGES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../examples/triskar2/target/thumbv7m-none-eabi/release")
+        });
+    let p = dir.join(name);
     std::fs::read(&p).unwrap_or_else(|e| {
         panic!(
             "{}: {e} (build the images first: cd examples/triskar2 && cargo build --release)",
