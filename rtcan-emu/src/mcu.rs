@@ -285,6 +285,16 @@ extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *
     if let Err(a) = st.write(target, size, v) {
         st.unknown_access(a, true);
     }
+    // A write to a timer, the bxCAN or the NVIC/SysTick may move the next event or pend an
+    // interrupt: end this run so `run_until` recomputes its horizon and takes it in time.
+    let replan = (0x4000_0000..0x4000_0C00).contains(&aligned)
+        || (0x4000_6400..0x4000_6800).contains(&aligned)
+        || (0xE000_E000..0xE000_F000).contains(&aligned);
+    // Stopping here, inside an instruction, would resume at a stale PC: the code hook
+    // stops cleanly before the next instruction instead.
+    if replan {
+        st.budget = st.budget.min(st.instructions + 1);
+    }
 }
 
 /// Regions are registered with their base folded into the offset's high bits: see `map`.
