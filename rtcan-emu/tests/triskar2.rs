@@ -105,10 +105,8 @@ fn six_images_boot_and_sync_within_three_cycles() {
         assert_eq!(m.st.bit_ps, BIT, "{}: 1 Mbit/s", m.name);
     }
     let cycle = cycle_bits(&bus);
-    assert_eq!(
-        cycle, 10_001,
-        "10 ms cycle (robot.toml) measured SOF to SOF"
-    );
+    // 10 ms (robot.toml) SOF to SOF; the SOF lands on the bit after the TXRQ.
+    assert!(cycle.abs_diff(10_000) <= 1, "cycle of {cycle} bits");
     let first_ref = bus.log.first().map(|(_, _, s)| *s).unwrap();
     assert!(
         first_ref < 1_000,
