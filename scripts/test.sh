@@ -15,6 +15,8 @@ echo "== host tests of the firmware workspaces' portable crates"
 
 echo "== on-target tests under QEMU (Cortex-M3, lm3s6965evb)"
 bash boards/run-qemu.sh
+# The committed cost table (simulator CPU model, timing check) matches the QEMU rows.
+bash scripts/update-costs.sh --check
 
 echo "== Triskar2 firmware images and size budgets"
 bash examples/triskar2/size-check.sh

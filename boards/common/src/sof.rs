@@ -5,65 +5,142 @@
 //! (`CAN_RDTxR.TIME`). Resolution: one bit time (1 µs at 1 Mbit/s); the counter wraps
 //! every 65 536 bits. The counter itself cannot be read, so its relation to the local
 //! clock (`offset`: local ns at counter value 0, unwrapped) is estimated from the RX
-//! interrupts: the frame-valid event that raises the interrupt happens a known number of
-//! bits after SOF (from the frame's exact length), so `now - (sof + bits) * bit_ns` is an
-//! upper bound of the offset, too high by the interrupt latency. The smallest bound seen
+//! interrupts: the frame-valid event that raises the interrupt happens at least
+//! `valid_bits_min(dlc)` bits after SOF (the frame without stuff bits), so
+//! `now - (sof + valid_bits_min) * bit_ns` is an upper bound of the offset, too high by
+//! the interrupt latency plus the frame's stuff bits. The smallest bound seen
 //! (minimum-latency filter, as in NTP) is kept; it may rise by the allowed drift between
 //! frames so that a CAN bit clock slower than the local clock is followed.
+//!
+//! Widening the 16-bit stamp needs bounds, not the exact frame length: the stamp is
+//! unwrapped to the value *nearest* to the SOF estimated from the current offset, which
+//! is right as long as that estimate is within ±32 767 bits (±32.7 ms at 1 Mbit/s) of the
+//! truth. The estimate is low by the offset's error (the best latency seen so far, e.g.
+//! the first frame's, which may have waited in the FIFO while the firmware started) and
+//! high by this frame's latency and stuff bits; both are far below 32 ms. (Unwrapping to
+//! the latest value not after the estimated counter, as before, failed as soon as the
+//! first frame's latency exceeded a later frame's length: 65 536 bits early, for ever.)
+//! No CRC or bit-stuffing computation runs on the receive path.
+
+/// Bits from a frame's SOF to its frame-valid point (the last-but-one EOF bit, where the
+/// RX interrupt is raised) of an extended data frame with `dlc` data bytes, without stuff
+/// bits: SOF 1, arbitration 32, control 6, data 8·dlc, CRC 15, CRC delimiter 1, ACK 2,
+/// EOF 6. A lower bound of the real distance (which adds 0 … 24 stuff bits).
+pub const fn valid_bits_min(dlc: u8) -> u32 {
+    let dlc = if dlc > 8 { 8 } else { dlc };
+    63 + 8 * dlc as u32
+}
 
 /// Maps TTCM timestamps to local nanoseconds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SofClock {
     bit_ns: i64,
-    drift_ppm: i64,
+    /// 2^32 / bit_ns, rounded up: ns → bits by multiply and shift (a 64-bit division is a
+    /// library call of a few hundred instructions on the Cortex-M3).
+    inv_bit_q32: u32,
+    /// Drift bound, ppm × 2^20 / 10^6, rounded up.
+    drift_q20: u32,
     /// Local ns at unwrapped counter value 0 (`None` until the first frame). The counter's
     /// absolute value is never needed: a whole number of wraps picked at the first frame
     /// is absorbed by the offset.
     offset: Option<i64>,
     /// Local time of the last offset update.
     updated: i64,
+    /// Estimated counter value (unwrapped) at `updated`, and its local time under the
+    /// current offset (`offset + anchor_bits * bit_ns`, kept to avoid the multiply).
+    anchor_bits: i64,
+    anchor_local: i64,
 }
+
+/// Gaps between frames below this many ns take the 32-bit path (multiply and shift);
+/// longer silences (over 2 s) take the 64-bit one with a division.
+const FAST_GAP_NS: i64 = 1 << 31;
 
 impl SofClock {
     /// Bit time `bit_ns` (a whole number of ns at every standard rate) and the bound of
     /// the drift between the local and the bus bit clock, `drift_ppm`.
     pub const fn new(bit_ns: u32, drift_ppm: u32) -> Self {
-        let bit_ns = if bit_ns == 0 { 1 } else { bit_ns as i64 };
+        let bit_ns = if bit_ns == 0 { 1 } else { bit_ns as u64 };
         SofClock {
-            bit_ns,
-            drift_ppm: drift_ppm as i64,
+            bit_ns: bit_ns as i64,
+            inv_bit_q32: {
+                let inv = (1u64 << 32).div_ceil(bit_ns);
+                // 1 ns bits (not a CAN rate) round to 2^32 - 1: off by one bit, harmless.
+                if inv > u32::MAX as u64 {
+                    u32::MAX
+                } else {
+                    inv as u32
+                }
+            },
+            drift_q20: {
+                let q = ((drift_ppm as u64) << 20).div_ceil(1_000_000);
+                if q > u32::MAX as u64 {
+                    u32::MAX
+                } else {
+                    q as u32
+                }
+            },
             offset: None,
             updated: 0,
+            anchor_bits: 0,
+            anchor_local: 0,
         }
     }
 
     /// Local ns of the SOF of a frame with TTCM stamp `time16`, whose RX interrupt was
-    /// handled at local `now`, `bits_sof_to_irq` bits after its SOF (frame length up to
-    /// the frame-valid point). Also refines the offset estimate.
-    pub fn sof(&mut self, time16: u16, bits_sof_to_irq: u32, now: u64) -> u64 {
-        let now = now.min(i64::MAX as u64) as i64;
-        let bits = bits_sof_to_irq as i64;
+    /// handled at local `now`, at least `min_bits_sof_to_irq` bits after its SOF (use
+    /// `valid_bits_min(dlc)`). Also refines the offset estimate.
+    pub fn sof(&mut self, time16: u16, min_bits_sof_to_irq: u32, now: u64) -> u64 {
+        let now = now.min(i64::MAX as u64 >> 1) as i64;
+        let bits = (min_bits_sof_to_irq & 0xFFFF) as i64;
         let bit = self.bit_ns;
-        let (sof_bits, offset) = match self.offset {
-            None => {
-                let sof_bits = time16 as i64;
-                (sof_bits, now - (sof_bits + bits) * bit)
-            }
-            Some(offset) => {
-                // Drift since the last update may make the stored offset too high and so
-                // the estimated counter too low: unwrap against an estimate raised by it.
-                let drift_ns =
-                    (now - self.updated).max(0).saturating_mul(self.drift_ppm) / 1_000_000;
-                let est_now = (now - offset) / bit + drift_ns / bit + 1;
-                let back = (est_now as u16).wrapping_sub(time16) as i64;
-                let sof_bits = est_now - back;
-                let candidate = now - (sof_bits + bits) * bit;
-                (sof_bits, candidate.min(offset.saturating_add(drift_ns)))
-            }
+        let Some(offset) = self.offset else {
+            // First frame: anchor the counter at this stamp (its wraps are absorbed).
+            self.offset = Some(now - (time16 as i64 + bits) * bit);
+            self.updated = now;
+            self.anchor_bits = time16 as i64 + bits;
+            self.anchor_local = now;
+            return (now - bits * bit).max(0) as u64;
         };
-        self.offset = Some(offset);
+        // Drift since the last update may make the offset too high and so the estimated
+        // counter too low: estimate against an offset lowered by the drift bound. The
+        // estimate only needs to be within ±32 767 bits: a bit of rounding is harmless.
+        let elapsed = now - self.updated;
+        let (drift, gap_bits) = if (0..FAST_GAP_NS).contains(&elapsed) {
+            // The common case, frames less than 2 s apart: one 32 × 32 → 64 multiply each.
+            let e = elapsed as u32;
+            let drift = ((e as u64 * self.drift_q20 as u64 + (1 << 20) - 1) >> 20) as u32;
+            let gap = e.saturating_add(drift);
+            let gap_bits = (gap as u64 * self.inv_bit_q32 as u64) >> 32;
+            (drift as i64, gap_bits as i64)
+        } else {
+            let e = elapsed.clamp(0, 1 << 40);
+            let drift = (e * self.drift_q20 as i64 + (1 << 20) - 1) >> 20;
+            (drift, (e + drift) / bit)
+        };
+        let est16 = (self.anchor_bits + gap_bits - bits) as u16;
+        // Nearest value congruent to the stamp (mod 2^16), relative to the anchor.
+        let rel = gap_bits - bits + time16.wrapping_sub(est16) as i16 as i64;
+        let sof_local = self.anchor_local + rel * bit;
+        // This frame's offset bound minus the current offset (≥ 0 unless it is better).
+        let excess = now - sof_local - bits * bit;
+        let d = excess.min(drift);
+        self.offset = Some(offset + d);
+        // New anchor: the counter at `now` per the new offset.
+        let k = self.bits_in(excess - d);
+        self.anchor_bits += rel + bits + k;
+        self.anchor_local = sof_local + d + (bits + k) * bit;
         self.updated = now;
-        (offset + sof_bits * bit).max(0) as u64
+        (sof_local + d).max(0) as u64
+    }
+
+    /// `ns` (≥ 0) in bits, rounded down (± 1 bit).
+    fn bits_in(&self, ns: i64) -> i64 {
+        if (0..FAST_GAP_NS).contains(&ns) {
+            ((ns as u64 * self.inv_bit_q32 as u64) >> 32) as i64
+        } else {
+            ns / self.bit_ns
+        }
     }
 
     /// Current offset estimate (local ns at the counter value taken as 0).
@@ -138,5 +215,127 @@ mod tests {
         }
         // Within the 1.5 µs latency plus one bit of tracking lag.
         assert!(worst <= 2_500, "worst {worst}");
+    }
+    /// Deterministic pseudo-random numbers (xorshift32) for the traffic below.
+    struct Rng(u32);
+    impl Rng {
+        fn next(&mut self) -> u32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            self.0
+        }
+    }
+
+    /// Runs `queued` frames waiting in the FIFO at start (all handled at once, the first
+    /// `first_latency` ns after its frame-valid point) and then 2 000 frames every
+    /// ~1 ms with 0 … 24 stuff bits and 0 … 20 µs latency; the counter starts at
+    /// `counter0`. Returns the worst error of the later frames beyond what their own
+    /// latency and stuff bits allow (0 when correct), and checks no SOF is ever early.
+    fn run(first_latency: u64, queued: u64, counter0: u64, seed: u32) -> u64 {
+        let bit = BIT;
+        // Local ns at (unwrapped) counter value 0: the local clock is 3 s ahead.
+        let origin = 3_000_000_000u64;
+        let mut c = SofClock::new(bit as u32, 200);
+        let mut rng = Rng(seed);
+        let mut sof_bits = counter0;
+        // The queued frames: back to back, all read by the first RX interrupt.
+        let mut frames = [(0u64, 0u8, 0u32); 3];
+        for f in frames.iter_mut().take(queued as usize) {
+            let dlc = (rng.next() % 9) as u8;
+            let stuff = rng.next() % 25;
+            *f = (sof_bits, dlc, stuff);
+            sof_bits += (valid_bits_min(dlc) + stuff) as u64 + 4;
+        }
+        if queued > 0 {
+            let (last_sof, dlc, stuff) = frames[queued as usize - 1];
+            let now =
+                origin + (last_sof + (valid_bits_min(dlc) + stuff) as u64) * bit + first_latency;
+            for &(s, dlc, _) in frames.iter().take(queued as usize) {
+                let got = c.sof(s as u16, valid_bits_min(dlc), now);
+                // Never before the true SOF, and not later than the wait in the FIFO.
+                assert!(got >= origin + s * bit, "queued frame early");
+                assert!(got <= now, "queued frame after its interrupt");
+            }
+        }
+        let mut worst_excess = 0u64;
+        for _ in 0..2_000 {
+            sof_bits += 900 + (rng.next() % 200) as u64;
+            let dlc = (rng.next() % 9) as u8;
+            let stuff = (rng.next() % 25) as u64;
+            let latency = (rng.next() % 20_000) as u64;
+            let truth = origin + sof_bits * bit;
+            let now = truth + (valid_bits_min(dlc) as u64 + stuff) * bit + latency;
+            let got = c.sof(sof_bits as u16, valid_bits_min(dlc), now);
+            assert!(got >= truth, "SOF {} ns early", truth - got);
+            let allowed = stuff * bit + latency;
+            worst_excess = worst_excess.max((got - truth).saturating_sub(allowed));
+        }
+        worst_excess
+    }
+
+    /// Regression (issue 10): the first frame's RX latency E (a module booting into a
+    /// live bus, frames queued in its FIFO before the firmware reads them) made the
+    /// unwrap land 65 536 bits early for every later frame whose length was below E.
+    #[test]
+    fn first_frame_latency_up_to_10_ms_does_not_break_the_unwrap() {
+        let mut e = 0;
+        while e <= 10_000_000 {
+            for counter0 in [0u64, 40_000, 65_500] {
+                let excess = run(e, 1, counter0, 0x1234_5678 ^ e as u32);
+                assert_eq!(excess, 0, "first latency {e} ns, counter {counter0}");
+            }
+            e += if e < 1_000_000 { 25_000 } else { 250_000 };
+        }
+    }
+
+    #[test]
+    fn frames_queued_at_start_do_not_break_the_unwrap() {
+        for queued in 1..=3 {
+            for e in [0u64, 250_000, 3_000_000, 10_000_000] {
+                let excess = run(e, queued, 65_000, 0xDEAD_BEEF ^ e as u32);
+                assert_eq!(excess, 0, "{queued} queued, latency {e} ns");
+            }
+        }
+    }
+
+    #[test]
+    fn converges_to_the_best_frame() {
+        // First frame 5 ms late, later frames 1 µs late without stuff bits: from the
+        // second frame on the error is that frame's latency, not the first's.
+        let mut c = SofClock::new(BIT as u32, 0);
+        let origin = 1_000_000_000u64;
+        let n = valid_bits_min(8) as u64;
+        assert_eq!(
+            c.sof(100, n as u32, origin + (100 + n) * BIT + 5_000_000),
+            origin + 100 * BIT + 5_000_000
+        );
+        for k in 1..100u64 {
+            let s = 100 + k * 1_000;
+            let got = c.sof(s as u16, n as u32, origin + (s + n) * BIT + 1_000);
+            assert_eq!(got, origin + s * BIT + 1_000, "frame {k}");
+        }
+    }
+
+    #[test]
+    fn long_silences_take_the_exact_path() {
+        // 10 s and 100 s without a frame (beyond the multiply-shift range), no latency.
+        let mut c = SofClock::new(BIT as u32, 200);
+        let origin = 7_000_000u64;
+        for s in [5u64, 10_000_005, 110_000_005, 110_001_005] {
+            let now = origin + (s + 100) * BIT;
+            assert_eq!(
+                c.sof(s as u16, 100, now),
+                origin + s * BIT,
+                "frame at {s} bits"
+            );
+        }
+    }
+
+    #[test]
+    fn valid_bits_min_is_the_unstuffed_frame_to_its_valid_point() {
+        assert_eq!(valid_bits_min(0), 63);
+        assert_eq!(valid_bits_min(8), 127);
+        assert_eq!(valid_bits_min(15), 127);
     }
 }

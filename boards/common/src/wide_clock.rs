@@ -28,6 +28,10 @@ impl WideClock {
     pub const fn new() -> Self {
         WideClock { half_periods: 0 }
     }
+    /// A clock that has counted `half_periods` already (models, tests).
+    pub const fn from_half_periods(half_periods: u32) -> Self {
+        WideClock { half_periods }
+    }
     /// Call once per update (overflow) and once per half-period compare event.
     pub fn on_half_period(&mut self) {
         self.half_periods = self.half_periods.wrapping_add(1);

@@ -9,6 +9,7 @@ pub mod bus;
 pub mod meter;
 pub mod robot;
 pub mod soft_can;
+pub mod split;
 pub mod test_host;
 
 use cortex_m_semihosting::{debug, hprintln};

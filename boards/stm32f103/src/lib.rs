@@ -1,7 +1,8 @@
-//! RTCAN driver for the STM32F103 (Cortex-M3, bxCAN): the CAN adapter implementing
-//! `rtcan_core::Controller` (`can`), the slot timer and local clock on TIM2 (`slot_timer`)
-//! and the glue that feeds interrupts to the engine (`glue`). Meant to be driven from RTIC
-//! hardware tasks; nothing here is global, every peripheral is owned by a value.
+//! RTCAN driver for the STM32F103 (Cortex-M3, bxCAN), in the split interrupt
+//! architecture of `rtcan_board_common::protocol`: the CAN parts per interrupt (`can`),
+//! the slot timer and local clock on TIM2 (`slot_timer`) and the slot-timer interrupt
+//! body (`glue`). Meant to be driven from RTIC hardware tasks; nothing here is global,
+//! every peripheral is owned by a value.
 //!
 //! Clock tree assumed by the constants: HSE 8 MHz, SYSCLK 72 MHz, PCLK1 36 MHz (the CAN
 //! clock), TIM2 clock 72 MHz.
@@ -11,7 +12,10 @@ pub mod can;
 pub mod glue;
 pub mod slot_timer;
 
-pub use can::{BxCan, CanStats, ErrorChange};
+pub use can::{
+    configure, CanParts, CanRx, CanSce, CanStats, CanTx, CanTxIrq, EnableTimeout, ErrorChange,
+};
+pub use rtcan_board_common as common;
 pub use rtcan_board_common::{can_btr, filter_set, FilterSet};
 pub use slot_timer::SlotTimer;
 pub use stm32f1xx_hal as hal;

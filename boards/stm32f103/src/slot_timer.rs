@@ -1,8 +1,10 @@
 //! The slot timer and the local clock, both on TIM2 (16-bit, free running at 8 MHz:
 //! one tick = 125 ns exactly, wrap every 8.192 ms). The counter is extended to 64 bits in
-//! software (`WideClock`: update event + compare channel 2 at half period); compare
-//! channel 1 is the engine's wake-up alarm, armed at the local time `Engine::poll`
-//! returned. No polling and no busy wait: between events the CPU sleeps.
+//! software (`WideClock`: update event + compare channel 2 at half period). Compare
+//! channel 1 commits the prepared slot plan (boards/common `protocol`), compare channel 3
+//! is the prepare alarm that pends the protocol task ahead of a wake-up. No polling and
+//! no busy wait: between events the CPU sleeps.
+use rtcan_board_common::protocol::SlotTimerHw;
 use rtcan_board_common::wide_clock::{Arm, WideClock};
 use rtcan_core::time::Nanos;
 use stm32f1xx_hal::pac;
@@ -18,9 +20,11 @@ const CR1_CEN: u32 = 1;
 const DIER_UIE: u32 = 1;
 const DIER_CC1IE: u32 = 1 << 1;
 const DIER_CC2IE: u32 = 1 << 2;
+const DIER_CC3IE: u32 = 1 << 3;
 const SR_UIF: u32 = 1;
 const SR_CC1IF: u32 = 1 << 1;
 const SR_CC2IF: u32 = 1 << 2;
+const SR_CC3IF: u32 = 1 << 3;
 const EGR_UG: u32 = 1;
 
 /// The timer clock is not a multiple of `TICK_HZ`.
@@ -31,8 +35,38 @@ pub struct BadTimerClock;
 pub struct SlotTimer {
     tim: pac::TIM2,
     clock: WideClock,
-    /// Pending alarm, in ticks.
-    alarm: Option<u64>,
+    /// Commit target beyond the compare range (re-armed at half-period events).
+    commit_later: Option<u64>,
+    /// Prepare target beyond the compare range.
+    prepare_later: Option<u64>,
+}
+
+/// Which alarm a compare channel serves.
+#[derive(Clone, Copy)]
+enum Channel {
+    Commit,
+    Prepare,
+}
+
+impl Channel {
+    const fn index(self) -> usize {
+        match self {
+            Channel::Commit => 0,
+            Channel::Prepare => 2,
+        }
+    }
+    const fn ie(self) -> u32 {
+        match self {
+            Channel::Commit => DIER_CC1IE,
+            Channel::Prepare => DIER_CC3IE,
+        }
+    }
+    const fn flag(self) -> u32 {
+        match self {
+            Channel::Commit => SR_CC1IF,
+            Channel::Prepare => SR_CC3IF,
+        }
+    }
 }
 
 impl SlotTimer {
@@ -60,7 +94,8 @@ impl SlotTimer {
         Ok(SlotTimer {
             tim,
             clock: WideClock::new(),
-            alarm: None,
+            commit_later: None,
+            prepare_later: None,
         })
     }
 
@@ -73,69 +108,143 @@ impl SlotTimer {
         self.ticks() * TICK_NS
     }
 
-    /// Arms the alarm at local time `at` (rounded up to a tick). Returns false if `at` is
-    /// already due: the caller runs the engine again instead of waiting.
-    pub fn set_alarm(&mut self, at: Nanos) -> bool {
-        let target = at.div_ceil(TICK_NS);
-        self.alarm = Some(target);
-        self.arm()
-    }
-
-    fn arm(&mut self) -> bool {
-        let Some(target) = self.alarm else {
-            return true;
-        };
-        match WideClock::arm(target, self.ticks()) {
-            Arm::Due => {
-                self.alarm = None;
-                self.set_cc1_interrupt(false);
-                false
-            }
-            Arm::Compare(value) => {
-                self.tim.ccr(0).write(|w| unsafe { w.bits(value as u32) });
-                self.set_cc1_interrupt(true);
-                // The counter may have passed `value` while it was written.
-                if self.ticks() >= target {
-                    self.alarm = None;
-                    self.set_cc1_interrupt(false);
-                    return false;
-                }
-                true
-            }
-            Arm::Later => {
-                self.set_cc1_interrupt(false);
-                true
-            }
-        }
-    }
-
-    fn set_cc1_interrupt(&mut self, on: bool) {
-        self.tim.sr().write(|w| unsafe { w.bits(!SR_CC1IF) });
+    fn set_ie(&mut self, ch: Channel, on: bool) {
         self.tim.dier().modify(|r, w| unsafe {
             w.bits(if on {
-                r.bits() | DIER_CC1IE
+                r.bits() | ch.ie()
             } else {
-                r.bits() & !DIER_CC1IE
+                r.bits() & !ch.ie()
             })
         });
     }
 
-    /// TIM2 interrupt: counts half periods and returns true when the alarm is due (then
-    /// run `Engine::poll` and re-arm with its result).
-    pub fn on_interrupt(&mut self) -> bool {
+    /// Arms `ch` at tick `target`; false if it has already passed.
+    fn arm(&mut self, ch: Channel, target: u64) -> bool {
+        let later = match WideClock::arm(target, self.ticks()) {
+            Arm::Due => {
+                self.set_ie(ch, false);
+                return false;
+            }
+            Arm::Compare(value) => {
+                self.tim
+                    .ccr(ch.index())
+                    .write(|w| unsafe { w.bits(value as u32) });
+                // rc_w0: clear only this flag (a match of the old value).
+                self.tim.sr().write(|w| unsafe { w.bits(!ch.flag()) });
+                self.set_ie(ch, true);
+                // The counter may have passed `value` while it was written.
+                if self.ticks() >= target {
+                    self.set_ie(ch, false);
+                    return false;
+                }
+                None
+            }
+            Arm::Later => {
+                self.set_ie(ch, false);
+                Some(target)
+            }
+        };
+        match ch {
+            Channel::Commit => self.commit_later = later,
+            Channel::Prepare => self.prepare_later = later,
+        }
+        true
+    }
+
+    /// Ticks from the commit compare's match to now (bench builds: the slot boundary's
+    /// latency as the hardware saw it, blocking and interrupt entry included).
+    pub fn ticks_since_commit_match(&self) -> u16 {
+        let cnt = self.tim.cnt().read().bits() as u16;
+        let ccr = self.tim.ccr(0).read().bits() as u16;
+        cnt.wrapping_sub(ccr)
+    }
+
+    /// TIM2 interrupt entry: which alarms fired (two register reads, nothing written, so
+    /// the commit can follow at once). A CC1 match with its interrupt enabled is the
+    /// boundary: the compare is only used within 3/4 of a wrap, so it cannot match early.
+    pub fn flags(&self) -> TimerFlags {
         let sr = self.tim.sr().read().bits();
+        let dier = self.tim.dier().read().bits();
+        TimerFlags {
+            sr,
+            commit: sr & SR_CC1IF != 0 && dier & DIER_CC1IE != 0,
+            prepare: sr & SR_CC3IF != 0 && dier & DIER_CC3IE != 0,
+        }
+    }
+
+    /// The rest of the interrupt, after the commit: clears the flags, disarms the alarms
+    /// that fired, counts half periods and re-arms far targets that came into range; one
+    /// already due is raised again by a software compare event (the interrupt re-enters
+    /// at once and handles it like a match).
+    pub fn acknowledge(&mut self, f: TimerFlags) {
         // rc_w0 flags: write 0 to the ones handled, 1 to leave the others alone.
         self.tim
             .sr()
-            .write(|w| unsafe { w.bits(!(sr & (SR_UIF | SR_CC2IF))) });
-        if sr & SR_UIF != 0 {
-            self.clock.on_half_period();
+            .write(|w| unsafe { w.bits(!(f.sr & (SR_UIF | SR_CC1IF | SR_CC2IF | SR_CC3IF))) });
+        if f.commit || f.prepare {
+            let off =
+                (if f.commit { DIER_CC1IE } else { 0 }) | (if f.prepare { DIER_CC3IE } else { 0 });
+            self.tim
+                .dier()
+                .modify(|r, w| unsafe { w.bits(r.bits() & !off) });
         }
-        if sr & SR_CC2IF != 0 {
-            self.clock.on_half_period();
+        if f.sr & (SR_UIF | SR_CC2IF) != 0 {
+            if f.sr & SR_UIF != 0 {
+                self.clock.on_half_period();
+            }
+            if f.sr & SR_CC2IF != 0 {
+                self.clock.on_half_period();
+            }
+            // A far target may now be within compare range.
+            if let Some(t) = self.commit_later.take() {
+                if !self.arm(Channel::Commit, t) {
+                    self.raise(Channel::Commit);
+                }
+            }
+            if let Some(t) = self.prepare_later.take() {
+                if !self.arm(Channel::Prepare, t) {
+                    self.raise(Channel::Prepare);
+                }
+            }
         }
-        // A half-period event may bring a far alarm into compare range, and the compare
-        // event itself means it is due: `arm` decides both.
-        !self.arm()
+    }
+
+    /// Software compare event on `ch` with its interrupt enabled: the TIM2 interrupt
+    /// handles it as a match.
+    fn raise(&mut self, ch: Channel) {
+        // EGR.CCxG sits at the bit of SR.CCxIF.
+        self.tim.egr().write(|w| unsafe { w.bits(ch.flag()) });
+        self.set_ie(ch, true);
+    }
+}
+
+/// What a TIM2 interrupt found (`SlotTimer::flags`).
+#[derive(Clone, Copy, Debug)]
+pub struct TimerFlags {
+    sr: u32,
+    /// The commit compare matched: apply the plan.
+    pub commit: bool,
+    /// The prepare alarm fired: pend the protocol task.
+    pub prepare: bool,
+}
+
+impl SlotTimerHw for SlotTimer {
+    fn now(&self) -> Nanos {
+        SlotTimer::now(self)
+    }
+    fn ticks_of(at: Nanos) -> u64 {
+        at.div_ceil(TICK_NS)
+    }
+    fn arm_commit(&mut self, at_ticks: u64) -> bool {
+        self.arm(Channel::Commit, at_ticks)
+    }
+    fn arm_prepare(&mut self, at_ticks: u64) {
+        if at_ticks == u64::MAX {
+            self.prepare_later = None;
+            self.set_ie(Channel::Prepare, false);
+        } else if !self.arm(Channel::Prepare, at_ticks) {
+            // Already due: pend the timer interrupt through the compare event.
+            self.raise(Channel::Prepare);
+        }
     }
 }

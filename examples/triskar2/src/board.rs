@@ -9,7 +9,10 @@ use rtcan_board_stm32f103::hal::gpio::{gpioa, gpiob, Cr, GpioExt};
 use rtcan_board_stm32f103::hal::pac;
 use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{self, Rcc};
-use rtcan_board_stm32f103::{can_btr, BxCan, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ};
+use rtcan_board_stm32f103::hal::watchdog::IndependentWatchdog;
+use rtcan_board_stm32f103::{
+    can_btr, configure, CanParts, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ,
+};
 
 use crate::SYSCLK_HZ;
 use rtcan::robot_toml::BUS;
@@ -38,11 +41,19 @@ pub struct Pins {
 
 /// What the engine's driver gets from the common start-up.
 pub struct Bus {
-    /// CAN adapter, enabled, filters programmed.
-    pub can: BxCan<Floating>,
+    /// CAN controller, enabled, filters programmed, split by interrupt.
+    pub can: CanParts<Floating>,
     /// TIM2 slot timer, running.
     pub timer: SlotTimer,
+    /// Independent watchdog, running (`WATCHDOG_MS`): feed it from the app task.
+    pub watchdog: IndependentWatchdog,
 }
+
+/// Watchdog period: twice the app task's longest sleep (`run::MAX_SLEEP_MS`).
+pub const WATCHDOG_MS: u32 = 2_000;
+/// Polls of HSERDY before giving up (the crystal starts in ~2 ms; a poll is > 100 ns at
+/// the 8 MHz HSI the core runs on until then, so this waits > 50 ms).
+const HSE_POLLS: u32 = 500_000;
 
 /// What is left for the module's hardware after the common start-up.
 pub struct Board {
@@ -72,6 +83,20 @@ pub trait FromBoard {
 
 /// Brings the board up; `filters` = the module's `filter_set!(FILTERS)`.
 pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
+    // Start the crystal with a bounded wait: the HAL's `freeze` waits for HSERDY for
+    // ever, which on a board with a dead or missing crystal is a silent hang.
+    dp.RCC.cr().modify(|_, w| w.hseon().set_bit());
+    let mut polls = 0;
+    while dp.RCC.cr().read().hserdy().bit_is_clear() {
+        polls += 1;
+        if polls >= HSE_POLLS {
+            // defmt::panic! logs at error level, then stops (panic-probe).
+            defmt::panic!(
+                "HSE (8 MHz crystal) not ready after {=u32} polls",
+                HSE_POLLS
+            );
+        }
+    }
     let mut flash = dp.FLASH.constrain();
     let mut rcc = dp.RCC.freeze(
         rcc::Config::hse(8.MHz())
@@ -94,7 +119,12 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
     let afio = dp.AFIO.constrain(&mut rcc);
     let tx = gpioa.pa12.into_alternate_push_pull(&mut gpioa.crh);
     let can = dp.CAN.can::<Floating>(dp.USB, (tx, gpioa.pa11), &mut rcc);
-    let can = BxCan::new(can, BTR, BUS.bitrate, filters);
+    let can = match configure(can, BTR, filters) {
+        Ok(parts) => parts,
+        Err(_) => defmt::panic!(
+            "CAN did not join the bus (no 11 recessive bits): transceiver, supply, termination?"
+        ),
+    };
     let timer = match SlotTimer::new(dp.TIM2, &mut rcc, TIM2_CLOCK_HZ) {
         Ok(t) => t,
         // Unreachable with the clock tree checked above (72 MHz = 9 × 8 MHz).
@@ -118,5 +148,16 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
         usart1: dp.USART1,
         dma1: dp.DMA1,
     };
-    (Bus { can, timer }, board)
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    // Halted by the probe (breakpoint, `probe-rs` attach) the watchdog pauses too.
+    watchdog.stop_on_debug(&dp.DBGMCU, true);
+    watchdog.start(WATCHDOG_MS.millis());
+    (
+        Bus {
+            can,
+            timer,
+            watchdog,
+        },
+        board,
+    )
 }

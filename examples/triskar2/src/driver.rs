@@ -1,120 +1,129 @@
-//! The engine with everything it drives, as one RTIC resource shared by the hardware
-//! tasks (slot timer, CAN RX0/TX/SCE, kick). All of them run at the same, highest
-//! priority, so they never preempt each other and RTIC grants them the resource
-//! without a lock; the module's app task only locks it briefly to read the clock.
-use rtcan_board_stm32f103::glue;
+//! The protocol task's state (engine, the module's topics as its host, the split
+//! architecture's `Protocol`) and what the app task uses to wake it. The interrupt
+//! priorities (src/module_app.rs):
+//!
+//! | task | priority | work |
+//! |---|---|---|
+//! | `slot_timer` (TIM2) | 4, highest | commit the prepared plan: TXRQ of the slot's frame, aborts |
+//! | `can_rx`, `can_tx`, `can_sce` | 3 | registers into lock-free queues; bus-off: abort all |
+//! | `protocol` (EXTI1) | 2 | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up |
+//! | `module_app` | 1 | the module's nodes |
+//! | SysTick (monotonic) | lowest | wakes the app task |
+//!
+//! Only the slot-timer resource (`glue::Core`: TIM2, plan, TX mailboxes) is shared across
+//! priorities; its critical sections are a few dozen instructions (QEMU row
+//! `critical_section_slot`), the blocking of the slot timer.
+use heapless::spsc::Consumer;
+use rtcan_board_stm32f103::common::protocol::{DynController, Lock};
+use rtcan_board_stm32f103::common::{Protocol, RxEvent, Stamps, TxEvent};
+use rtcan_board_stm32f103::glue::Core;
 use rtcan_board_stm32f103::hal::gpio::Floating;
 use rtcan_board_stm32f103::hal::pac::{Interrupt, NVIC};
-use rtcan_board_stm32f103::{BxCan, SlotTimer};
 use rtcan_core::engine::Engine;
+use rtcan_core::id::CanId;
 use rtcan_core::time::Nanos;
 use rtcan_pubsub::ModuleHost;
 
-use crate::board::Bus;
+use crate::cycles;
 use crate::run::DELIVERED;
 
-/// Interrupt of the kick task (unused by the F103's peripherals in these images).
-pub const KICK_INTERRUPT: Interrupt = Interrupt::EXTI1;
+/// Interrupt of the protocol task (unused by the F103's peripherals in these images).
+pub const PROTOCOL_INTERRUPT: Interrupt = Interrupt::EXTI1;
+/// Capacity of the RX event queue (the FIFO holds 3 frames; the protocol task may be
+/// held off by one prepare, < 3 frames at 1 Mbit/s).
+pub const RX_QUEUE: usize = 8;
+/// Capacity of the TX event queue (3 mailboxes, bus-off).
+pub const TX_QUEUE: usize = 8;
+/// Drift bound between the local crystal and the bus bit clock, for SOF mapping.
+const DRIFT_PPM: u32 = 200;
 
-/// The app published: pend the kick task, which hands SRT/NRT messages to the engine
-/// (the generated topics of `rtcan::robot_toml` have no kick hook of their own).
-pub fn kick() {
-    NVIC::pend(KICK_INTERRUPT);
+/// Pends the protocol task (the app published, a queue has events, an alarm fired).
+pub fn pend_protocol() {
+    NVIC::pend(PROTOCOL_INTERRUPT);
 }
 
-/// Engine, CAN adapter, slot timer and the module's topics as the engine's host.
+/// The app published: the protocol task hands SRT/NRT messages to the engine.
+pub fn kick() {
+    pend_protocol();
+}
+
+/// `Lock` over an RTIC shared-resource proxy.
+pub struct Rtic<M>(pub M);
+
+impl<M: rtic::Mutex> Lock<M::T> for Rtic<M> {
+    fn lock<R>(&mut self, f: impl FnOnce(&mut M::T) -> R) -> R {
+        self.0.lock(f)
+    }
+}
+
+/// The slot-timer resource of these images.
+pub type SlotCore = Core<Floating>;
+
+/// Engine, the module's topics as the engine's host, and the protocol task's state.
 pub struct Driver<const RX: usize, const ARENA: usize, const Q: usize> {
     engine: Engine<'static, RX, ARENA, Q>,
-    can: BxCan<Floating>,
-    timer: SlotTimer,
     host: ModuleHost<'static>,
+    proto: Protocol,
 }
 
 impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
-    /// The driver over the module's generated engine and host.
-    pub fn new(engine: Engine<'static, RX, ARENA, Q>, bus: Bus, host: ModuleHost<'static>) -> Self {
+    /// The driver over the module's generated engine and host, at `bitrate`, preparing
+    /// wake-ups half a slot (`slot_ns / 2`) ahead, with SOF times from `stamps`.
+    pub fn new(
+        engine: Engine<'static, RX, ARENA, Q>,
+        host: ModuleHost<'static>,
+        bitrate: u32,
+        slot_ns: Nanos,
+        stamps: Stamps,
+    ) -> Self {
+        let bit_ns = 1_000_000_000 / bitrate.max(1);
         Driver {
             engine,
-            can: bus.can,
-            timer: bus.timer,
             host,
+            proto: Protocol::new(bit_ns, DRIFT_PPM, slot_ns / 2).with_stamps(stamps),
         }
     }
 
-    /// Local time, ns (the clock of the engine and of received messages' stamps).
-    pub fn now(&self) -> Nanos {
-        self.timer.now()
-    }
-
-    /// First run of the engine after start-up: arms the slot alarm.
-    pub fn start(&mut self) {
-        glue::poll(
-            &mut self.timer,
-            &mut self.can,
-            &mut self.engine,
-            &mut self.host,
-        );
-    }
-
-    /// TIM2: slot boundaries, window ends, bus-off check.
-    pub fn on_timer(&mut self) {
-        glue::on_timer(
-            &mut self.timer,
-            &mut self.can,
-            &mut self.engine,
-            &mut self.host,
-        );
-        // A boundary frees queue room and may open a window: hand over what waits.
-        if self.pump() {
-            self.rearm();
-        }
-    }
-
-    /// USB_LP_CAN_RX0: received frames (reassembly, delivery to local subscribers).
-    /// A delivery wakes the app at once (event-driven nodes: obstacle_avoid on
-    /// teleop, the gateway forwarding reports), as the simulator runs it after one.
-    pub fn on_rx(&mut self) {
+    /// One run of the protocol task: queued RX events (a delivery wakes the app at once,
+    /// as the simulator runs it), queued TX events, then pump and prepare.
+    pub fn run(
+        &mut self,
+        rx: &mut Consumer<'_, RxEvent>,
+        tx: &mut Consumer<'_, TxEvent>,
+        slot: &mut impl Lock<SlotCore>,
+    ) {
         let delivered = self.engine.counters().rx_delivered;
-        glue::on_rx(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
-        self.rearm();
+        let (e, h, p) = (&mut self.engine, &mut self.host, &mut self.proto);
+        while let Some(ev) = rx.dequeue() {
+            let t = cycles::now();
+            p.on_rx_event(&ev, e, h, slot);
+            // From the identifier alone (no frame parse).
+            let sync = !ev.is_overrun()
+                && CanId::from_raw(ev.regs.tir >> 3).is_some_and(|id| id.is_sync());
+            if sync && !e.is_master() {
+                cycles::TASK_SYNC_SLAVE.since(t);
+                // Bring-up check of the TTCM stamps (docs/BRINGUP.md; DEFMT_LOG=debug).
+                defmt::debug!(
+                    "sync: ttcm {=u16} offset {=i64}",
+                    (ev.regs.tdtr >> 16) as u16,
+                    p.sof_clock().offset().unwrap_or(0)
+                );
+            } else {
+                cycles::TASK_RX_PROCESS.since(t);
+            }
+        }
+        while let Some(ev) = tx.dequeue() {
+            let t = cycles::now();
+            p.on_tx_event(&ev, e, h, slot);
+            cycles::TASK_TX_DONE.since(t);
+        }
+        let t = cycles::now();
+        p.run(e, h, slot, &mut |e, h, now, c| {
+            h.pump(e, now, &mut DynController(c));
+        });
+        cycles::TASK_PREPARE_SLOT.since(t);
         if self.engine.counters().rx_delivered != delivered {
             DELIVERED.notify();
         }
-    }
-
-    /// USB_HP_CAN_TX: mailbox completions (the next frame is loaded from here).
-    pub fn on_tx(&mut self) {
-        glue::on_tx(&self.timer, &mut self.can, &mut self.engine, &mut self.host);
-        // A completion frees queue room and may end a transfer early.
-        self.pump();
-        self.rearm();
-    }
-
-    /// CAN_SCE: error counters, bus-off.
-    pub fn on_sce(&mut self) {
-        glue::on_sce(&mut self.can, &mut self.engine);
-    }
-
-    /// Kick: SRT/NRT messages published by node tasks go to the engine.
-    pub fn on_kick(&mut self) {
-        if self.pump() {
-            self.rearm();
-        }
-    }
-
-    /// Hands queued SRT/NRT messages to the engine; true if any was submitted.
-    fn pump(&mut self) -> bool {
-        let now = self.timer.now();
-        self.host.pump(&mut self.engine, now, &mut self.can) > 0
-    }
-
-    /// The engine's next wake-up may have moved (a submit, a sync frame): re-arm.
-    fn rearm(&mut self) {
-        glue::poll(
-            &mut self.timer,
-            &mut self.can,
-            &mut self.engine,
-            &mut self.host,
-        );
     }
 }

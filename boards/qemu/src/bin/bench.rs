@@ -54,6 +54,19 @@ fn main() -> ! {
     }
     report("wide_clock_ticks", &s);
 
+    // TTCM stamp to local SOF time (protocol task, every received frame): frames ~1 ms
+    // apart with varying latency, across counter wraps.
+    let mut sof = rtcan_board_common::SofClock::new(1_000, 200);
+    let mut s = Stat::default();
+    for k in 1..200u64 {
+        let bits = k * 997;
+        let now = 3_000_000_000 + (bits + 127) * 1_000 + (k % 7) * 1_300;
+        s.add(meter.instructions(&mut || {
+            black_box(sof.sof(black_box(bits as u16), black_box(127), black_box(now)));
+        }));
+    }
+    report("sof_clock_sof", &s);
+
     // Loading one TX frame: fragment bytes + identifier + frame + mailbox write, for
     // every fragment of a 30-byte message (the engine's per-frame transmit work).
     let payload = [0x5Au8; 30];

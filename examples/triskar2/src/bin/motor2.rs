@@ -10,4 +10,7 @@ type App = triskar2_nodes::app::Motor2App;
 type Hw = fw::io::MotorIo;
 const NAME: &str = "motor2";
 
+/// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
+const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
+
 include!("../module_app.rs");

@@ -9,4 +9,7 @@ type App = triskar2_nodes::app::PsuApp;
 type Hw = fw::io::PsuIo;
 const NAME: &str = "psu";
 
+/// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
+const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
+
 include!("../module_app.rs");
