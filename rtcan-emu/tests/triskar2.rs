@@ -122,6 +122,7 @@ fn six_images_boot_and_sync_within_three_cycles() {
         (PROXIMITY, 40_000),
     ] {
         let at = first_of(&bus, id).unwrap_or(u64::MAX);
+        eprintln!("{id:#x}: first frame at bit {at} (first reference at bit {first_ref})");
         assert!(
             at < first_ref + 3 * cycle + period_bits,
             "{id:#x} first at bit {at}"
