@@ -66,6 +66,34 @@ impl Bus {
         }
     }
 
+    /// Bits the MCUs may run ahead of an idle bus: less than the shortest frame (44 bits
+    /// with intermission), so no node can miss a frame end by running ahead.
+    const LOOK_AHEAD: u64 = 40;
+
+    /// On an idle bus with no pending request: runs every MCU up to `LOOK_AHEAD` bits or
+    /// its first transmit request, and returns the bit at which the earliest request can
+    /// start a frame (nodes that ran past it had no request by then: they do not contend,
+    /// and nothing reaches them before that frame ends).
+    fn look_ahead(&mut self, bit: u64, end_bit: u64) -> Result<u64, String> {
+        let horizon = (bit + Self::LOOK_AHEAD).min(end_bit);
+        let mut first: Option<u64> = None;
+        for m in &mut self.mcus {
+            m.st.txrq_at = None;
+            m.st.stop_on_txrq = true;
+            let r = m.run_until(horizon * self.bit_ps);
+            m.st.stop_on_txrq = false;
+            r?;
+            if let Some(t) = m.st.txrq_at {
+                first = Some(first.map_or(t, |f| f.min(t)));
+            }
+        }
+        Ok(match first {
+            // SOF on the first bit boundary after the request.
+            Some(t) => (t / self.bit_ps + 1).clamp(bit + 1, horizon),
+            None => horizon,
+        })
+    }
+
     /// Current bus time in bits.
     pub fn bit(&self) -> u64 {
         self.mcus.iter().map(|m| m.now()).min().unwrap_or(0) / self.bit_ps.max(1)
@@ -77,9 +105,13 @@ impl Bus {
         let mut bit = self.mcus.iter().map(|m| m.now()).min().unwrap_or(0) / self.bit_ps;
         let end_bit = until / self.bit_ps;
         while bit < end_bit {
-            // Next decision point: the end of the frame on the wire, or the next bit.
+            // Next decision point: the end of the frame on the wire; on an idle bus with
+            // nothing pending, the bit after the first transmit request within a look-ahead.
+            let idle = self.on_wire.is_none() && bit >= self.idle_from;
+            let pending = self.mcus.iter().any(|m| m.st.can.tx_candidate().is_some());
             let step_to = match &self.on_wire {
                 Some(t) => t.end_bit,
+                None if idle && !pending => self.look_ahead(bit, end_bit)?,
                 None => bit + 1,
             }
             .min(end_bit);

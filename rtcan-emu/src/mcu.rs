@@ -70,6 +70,10 @@ pub struct State {
     pub usart1: Usart,
     pub dma1: Dma,
     pub unknown: Vec<UnknownAccess>,
+    /// Time (ps) of the first transmit request since the bus last cleared it.
+    pub txrq_at: Option<u64>,
+    /// `run_until` returns at the first transmit request (the bus's look-ahead).
+    pub stop_on_txrq: bool,
     /// All unknown accesses, repeats included.
     pub unknown_count: u64,
     /// Exceptions taken, by exception number.
@@ -192,6 +196,11 @@ impl State {
                 self.can.tick(bit);
                 let r = self.can.write(addr & 0x3FF, v, bit);
                 self.bit_ps = (self.can.bit_pclk_cycles() * PS) / self.rcc.pclk1().max(1);
+                // A transmit request (TIxR with TXRQ): the bus may have to arbitrate.
+                let off = addr & 0x3FF;
+                if (0x180..0x1B0).contains(&off) && off % 16 == 0 && v & 1 != 0 {
+                    self.txrq_at.get_or_insert(now);
+                }
                 r
             }
             0x4001_0000..=0x4001_03FF => self.afio.write(addr & 0x3FF, v),
@@ -444,6 +453,8 @@ impl Mcu {
             usart1: Usart::default(),
             dma1: Dma::default(),
             unknown: Vec::new(),
+            txrq_at: None,
+            stop_on_txrq: false,
             unknown_count: 0,
             taken: Default::default(),
             asleep_ps: 0,
@@ -831,6 +842,9 @@ impl Mcu {
         while self.st.now() < until {
             if let Some(f) = &self.st.fault {
                 return Err(f.clone());
+            }
+            if self.st.stop_on_txrq && self.st.txrq_at.is_some() {
+                return Ok(());
             }
             if self.st.iwdg.deadline.is_some_and(|d| d <= self.st.now())
                 || self.st.scs.reset_request
