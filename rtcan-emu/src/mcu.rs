@@ -198,7 +198,7 @@ impl State {
                 self.bit_ps = (self.can.bit_pclk_cycles() * PS) / self.rcc.pclk1().max(1);
                 // A transmit request (TIxR with TXRQ): the bus may have to arbitrate.
                 let off = addr & 0x3FF;
-                if (0x180..0x1B0).contains(&off) && off % 16 == 0 && v & 1 != 0 {
+                if (0x180..0x1B0).contains(&off) && off.is_multiple_of(16) && v & 1 != 0 {
                     self.txrq_at.get_or_insert(now);
                 }
                 r
