@@ -613,6 +613,12 @@ impl Mcu {
         b
     }
 
+    /// Writes emulated memory (RAM).
+    pub fn write_mem(&mut self, addr: u32, bytes: &[u8]) {
+        // SAFETY: live engine, `bytes` readable for its length.
+        unsafe { uc_mem_write(self.uc, u64::from(addr), bytes.as_ptr().cast(), bytes.len()) };
+    }
+
     /// Power-on / system reset (ARMv7-M B1.5.5): peripherals to reset values, image in
     /// flash, SRAM cleared, SP and PC from the vector table at 0. Time goes on.
     pub fn reset(&mut self) -> Result<(), EmuError> {
