@@ -10,6 +10,7 @@ pub mod bxcan;
 pub mod elf;
 pub mod mcu;
 pub mod periph;
+pub mod report;
 pub mod rtt;
 pub mod scs;
 mod uc;
