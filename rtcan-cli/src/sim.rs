@@ -13,6 +13,7 @@ const SYNOPSIS: &str =
     "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N]
                  [--seed S] [--load X] [--ber P] [--json] [--out DIR] [--sweep]
                  [--master-dies-at S]
+       rtcan sim [robot.toml] --emulate [--seconds N] [--json] [--images DIR]
        rtcan sim --help";
 
 const OPTIONS: &str =
@@ -133,6 +134,9 @@ fn prepare_out(dir: &Path) -> Result<(), String> {
 
 /// Runs `rtcan sim`; returns the exit code.
 pub fn run(args: &[String]) -> i32 {
+    if crate::emulate::wanted(args) {
+        return crate::emulate::run(args);
+    }
     let a = match parse(args) {
         Ok(Some(a)) => a,
         Ok(None) => {
