@@ -306,7 +306,8 @@ extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *
     }
 }
 
-/// Regions are registered with their base folded into the offset's high bits: see `map`.
+/// The absolute address: the per-region callbacks (`read_apb`, `read_sys`, ...) have
+/// already added their base to the offset Unicorn passes.
 fn region_base(off: u64) -> u32 {
     off as u32
 }
@@ -518,11 +519,6 @@ impl Mcu {
                     ud,
                 ),
             )?;
-            check(
-                "mmio dbg",
-                uc_mmio_map(uc, 0xE004_2000, 0x1000, read_dbg, ud, write_dbg, ud),
-            )
-            .ok();
             let mut h: uc_hook = 0;
             check(
                 "hook code",
@@ -910,12 +906,6 @@ extern "C" fn read_sys(uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_void)
 }
 extern "C" fn write_sys(uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *mut c_void) {
     mmio_write(uc, off + 0xE000_0000, size, v, ud)
-}
-extern "C" fn read_dbg(uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_void) -> u64 {
-    mmio_read(uc, off + 0xE004_2000, size, ud)
-}
-extern "C" fn write_dbg(uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *mut c_void) {
-    mmio_write(uc, off + 0xE004_2000, size, v, ud)
 }
 
 /// Bit-band alias word `off` → (word address, bit) in the region at `base`.
