@@ -18,3 +18,14 @@ if [ "${1:-}" = "--qemu" ] && ! command -v qemu-system-arm >/dev/null 2>&1; then
     exit 1
   fi
 fi
+# rtcan-emu links Debian's libunicorn (Unicorn 2); a prebuilt package installs in seconds,
+# where the unicorn-engine crate would compile Unicorn from C source with cmake.
+if [ "${1:-}" = "--qemu" ] && [ ! -e /usr/include/unicorn/unicorn.h ]; then
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libunicorn-dev >/dev/null
+  else
+    echo "libunicorn-dev missing: run 'sudo apt-get install libunicorn-dev'" >&2
+    exit 1
+  fi
+fi

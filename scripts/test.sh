@@ -5,8 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --qemu
 
-echo "== host tests (cargo test --workspace)"
-cargo test --workspace
+echo "== host tests (cargo test --workspace; rtcan-emu after the images are built)"
+cargo test --workspace --exclude rtcan-emu
 
 echo "== simulator on the modelled CPU: issue 10's before/after table (docs/SIM.md)"
 cargo run --release -q -p rtcan-sim --example cpu_before_after
@@ -23,3 +23,6 @@ bash scripts/update-costs.sh --check
 
 echo "== Triskar2 firmware images and size budgets"
 bash examples/triskar2/size-check.sh
+
+echo "== the Triskar2 images on emulated STM32F103 (rtcan-emu, docs/EMULATOR.md)"
+cargo test --release -p rtcan-emu

@@ -1,6 +1,7 @@
 //! The `rtcan` command. One file per subcommand; this file only dispatches.
 mod check;
 mod decode;
+mod emulate;
 mod out;
 mod sim;
 

@@ -15,6 +15,7 @@ const SYNOPSIS: &str =
                  [--master-dies-at S]
                  [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]
                  [--cpu-cost max|mean]
+       rtcan sim [robot.toml] --emulate [--seconds N] [--json] [--images DIR]
        rtcan sim --help";
 
 const OPTIONS: &str =
@@ -166,6 +167,9 @@ fn prepare_out(dir: &Path) -> Result<(), String> {
 
 /// Runs `rtcan sim`; returns the exit code.
 pub fn run(args: &[String]) -> i32 {
+    if crate::emulate::wanted(args) {
+        return crate::emulate::run(args);
+    }
     let a = match parse(args) {
         Ok(Some(a)) => a,
         Ok(None) => {

@@ -1,0 +1,19 @@
+//! An emulated STM32F103 for the rtcan firmware images: Unicorn executes the Cortex-M3
+//! instruction set; the NVIC/SysTick/SCB/DWT (`scs`) and the STM32F103 peripherals
+//! (`bxcan`, `periph`) are modelled here from the ARMv7-M ARM and RM0008, section by section.
+//! Unknown register accesses are errors with address and PC, never silent zeros.
+//!
+//! GPL-2.0-or-later because it links libunicorn. Nothing in the firmware or in the
+//! `rtcan` library depends on this crate.
+pub mod bus;
+pub mod bxcan;
+pub mod elf;
+pub mod mcu;
+pub mod periph;
+pub mod report;
+pub mod rtt;
+pub mod scs;
+mod uc;
+
+/// Result of a register access: the value read, or the unknown offset.
+pub type Access = Result<u32, u32>;

@@ -1,0 +1,970 @@
+//! One emulated STM32F103C8/CB: Unicorn's Cortex-M3 plus the models of `scs`, `periph`
+//! and `bxcan`, with time = instructions retired × cycles per instruction.
+use crate::bxcan::BxCan;
+use crate::elf;
+use crate::periph::{Adc, Afio, Dma, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, Usart, APB1_CAN, PS};
+use crate::scs::Scs;
+use crate::uc::*;
+use crate::Access;
+use core::ffi::c_void;
+
+/// Memory of the largest STM32F103 the images target (xE: 512 KiB flash, 64 KiB SRAM; RM0008
+/// §3.3); a C8 image simply never touches the rest.
+pub const FLASH_BASE: u32 = 0x0800_0000;
+pub const FLASH_SIZE: u32 = 512 * 1024;
+pub const SRAM_BASE: u32 = 0x2000_0000;
+pub const SRAM_SIZE: u32 = 64 * 1024;
+
+/// Emulated time per instruction.
+#[derive(Clone, Copy, Debug)]
+pub struct Timing {
+    /// Core cycles per instruction with zero wait states.
+    pub cpi: f64,
+    /// Extra cycles per instruction per flash wait state (the prefetch buffer hides most).
+    pub per_wait_state: f64,
+    /// Cycles of exception entry and of exception return (Cortex-M3 TRM §5.5.1: 12).
+    pub exception_cycles: u64,
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Timing {
+            cpi: 1.0,
+            per_wait_state: 0.25,
+            exception_cycles: 12,
+        }
+    }
+}
+
+/// An access to an address no model implements.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownAccess {
+    pub addr: u32,
+    pub pc: u32,
+    pub write: bool,
+    pub time_ps: u64,
+}
+
+/// Everything the callbacks reach (boxed: Unicorn holds its address).
+pub struct State {
+    pub timing: Timing,
+    /// Instructions retired.
+    pub instructions: u64,
+    /// Emulated time at `base_instr`.
+    base_ps: u64,
+    base_instr: u64,
+    /// Picoseconds per instruction at the current clocks.
+    instr_ps: f64,
+    budget: u64,
+    pub scs: Scs,
+    pub rcc: Rcc,
+    pub flash: Flash,
+    pub gpio: [Gpio; 5],
+    pub afio: Afio,
+    pub exti: Exti,
+    /// TIM2, TIM3, TIM4 (index 0..3).
+    pub tim: [Tim2; 3],
+    pub adc1: Adc,
+    pub can: BxCan,
+    pub iwdg: Iwdg,
+    pub usart1: Usart,
+    pub dma1: Dma,
+    pub unknown: Vec<UnknownAccess>,
+    /// Time (ps) of the first transmit request since the bus last cleared it.
+    pub txrq_at: Option<u64>,
+    /// `run_until` returns at the first transmit request (the bus's look-ahead).
+    pub stop_on_txrq: bool,
+    /// All unknown accesses, repeats included.
+    pub unknown_count: u64,
+    /// Exceptions taken, by exception number.
+    pub taken: std::collections::BTreeMap<u16, u64>,
+    /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
+    pub asleep_ps: u64,
+    exc_return: bool,
+    wfi: bool,
+    pub fault: Option<String>,
+    dbg_cr: u32,
+    /// Bus bit time in ps (from BTR and PCLK1) and the bus clock origin.
+    pub bit_ps: u64,
+    uc: *mut uc_engine,
+}
+
+impl State {
+    /// Emulated time now (ps).
+    pub fn now(&self) -> u64 {
+        self.base_ps + ((self.instructions - self.base_instr) as f64 * self.instr_ps) as u64
+    }
+
+    fn retime(&mut self) {
+        let now = self.now();
+        self.base_ps = now;
+        self.base_instr = self.instructions;
+        let ws = f64::from(self.flash.wait_states());
+        let cycles = self.timing.cpi + ws * self.timing.per_wait_state;
+        self.instr_ps = cycles * PS as f64 / self.rcc.hclk().max(1) as f64;
+    }
+
+    /// CPU cycles at time `now` (for SysTick and CYCCNT).
+    fn cycles(&self) -> u64 {
+        (self.now() as f64 / (PS as f64 / self.rcc.hclk().max(1) as f64)) as u64
+    }
+
+    /// Adds `cycles` of core time without instructions (exception entry/return, sleep).
+    fn add_time(&mut self, ps: u64) {
+        self.base_ps += ps;
+    }
+
+    fn pc(&self) -> u32 {
+        let mut v: u32 = 0;
+        // SAFETY: `uc` is the live engine of this state; `v` is a valid u32 out-parameter.
+        unsafe { uc_reg_read(self.uc, REG_PC, (&mut v as *mut u32).cast()) };
+        v
+    }
+
+    fn bus_bit(&self) -> u64 {
+        self.now() / self.bit_ps.max(1)
+    }
+
+    fn read(&mut self, addr: u32, size: u32) -> Access {
+        let now = self.now();
+        let cyc = self.cycles();
+        let r = match addr {
+            // TIM2/3/4 at 0x4000_0000/0400/0800, clocked by APB1ENR bits 0..2 (§7.3.8).
+            0x4000_0000..=0x4000_0BFF => {
+                let i = ((addr >> 10) & 3) as usize;
+                if self.rcc.apb1enr & (1 << i) == 0 {
+                    return Err(addr);
+                }
+                let clk = self.rcc.tim2clk();
+                let t = self.tim.get_mut(i).ok_or(addr)?;
+                t.sync(now, clk);
+                t.read(addr & 0x3FF)
+            }
+            0x4001_2400..=0x4001_27FF => self.adc1.read(addr & 0x3FF),
+            0x4000_3000..=0x4000_33FF => self.iwdg.read(addr & 0x3FF),
+            0x4000_6400..=0x4000_67FF => {
+                if self.rcc.apb1enr & APB1_CAN == 0 {
+                    return Err(addr);
+                }
+                let bit = self.bus_bit();
+                self.can.tick(bit);
+                self.can.read(addr & 0x3FF)
+            }
+            0x4001_0000..=0x4001_03FF => self.afio.read(addr & 0x3FF),
+            0x4001_0400..=0x4001_07FF => self.exti.read(addr & 0x3FF),
+            0x4001_0800..=0x4001_1BFF => {
+                let port = ((addr - 0x4001_0800) / 0x400) as usize;
+                self.gpio.get(port).ok_or(addr)?.read(addr & 0x3FF)
+            }
+            0x4001_3800..=0x4001_3BFF => self.usart1.read(addr & 0x3FF),
+            0x4002_0000..=0x4002_03FF => self.dma1.read(addr & 0x3FF),
+            0x4002_1000..=0x4002_13FF => self.rcc.read(addr & 0x3FF),
+            0x4002_2000..=0x4002_23FF => self.flash.read(addr & 0x3FF),
+            0xE000_1000..=0xE000_1FFF => self.scs.read_dwt(addr & 0xFFF, cyc),
+            0xE000_E000..=0xE000_EFFF => self.scs.read(addr & 0xFFF, cyc),
+            // DBGMCU (RM0008 §31.16): IDCODE of a medium-density device, CR.
+            0xE004_2000 => Ok(0x2003_6410),
+            0xE004_2004 => Ok(self.dbg_cr),
+            _ => Err(addr),
+        };
+        let _ = size;
+        r.map_err(|_| addr)
+    }
+
+    fn write(&mut self, addr: u32, size: u32, v: u32) -> Access {
+        let now = self.now();
+        let cyc = self.cycles();
+        let r = match addr {
+            0x4000_0000..=0x4000_0BFF => {
+                let i = ((addr >> 10) & 3) as usize;
+                if self.rcc.apb1enr & (1 << i) == 0 {
+                    return Err(addr);
+                }
+                let clk = self.rcc.tim2clk();
+                let t = self.tim.get_mut(i).ok_or(addr)?;
+                t.sync(now, clk);
+                t.write(addr & 0x3FF, v)
+            }
+            0x4001_2400..=0x4001_27FF => self.adc1.write(addr & 0x3FF, v),
+            0x4000_3000..=0x4000_33FF => self.iwdg.write(addr & 0x3FF, v, now),
+            0x4000_6400..=0x4000_67FF => {
+                if self.rcc.apb1enr & APB1_CAN == 0 {
+                    return Err(addr);
+                }
+                self.bit_ps = (self.can.bit_pclk_cycles() * PS) / self.rcc.pclk1().max(1);
+                let bit = self.bus_bit();
+                self.can.tick(bit);
+                let r = self.can.write(addr & 0x3FF, v, bit);
+                self.bit_ps = (self.can.bit_pclk_cycles() * PS) / self.rcc.pclk1().max(1);
+                // A transmit request (TIxR with TXRQ): the bus may have to arbitrate.
+                let off = addr & 0x3FF;
+                if (0x180..0x1B0).contains(&off) && off.is_multiple_of(16) && v & 1 != 0 {
+                    self.txrq_at.get_or_insert(now);
+                }
+                r
+            }
+            0x4001_0000..=0x4001_03FF => self.afio.write(addr & 0x3FF, v),
+            0x4001_0400..=0x4001_07FF => self.exti.write(addr & 0x3FF, v),
+            0x4001_0800..=0x4001_1BFF => {
+                let port = ((addr - 0x4001_0800) / 0x400) as usize;
+                self.gpio.get_mut(port).ok_or(addr)?.write(addr & 0x3FF, v)
+            }
+            0x4001_3800..=0x4001_3BFF => self.usart1.write(addr & 0x3FF, v),
+            0x4002_0000..=0x4002_03FF => self.dma1.write(addr & 0x3FF, v),
+            0x4002_1000..=0x4002_13FF => {
+                let r = self.rcc.write(addr & 0x3FF, v);
+                self.retime();
+                r
+            }
+            0x4002_2000..=0x4002_23FF => {
+                let r = self.flash.write(addr & 0x3FF, v);
+                self.retime();
+                r
+            }
+            0xE000_1000..=0xE000_1FFF => self.scs.write_dwt(addr & 0xFFF, v, cyc),
+            0xE000_E000..=0xE000_EFFF => self.scs.write(addr & 0xFFF, v, size, cyc),
+            0xE004_2004 => {
+                self.dbg_cr = v;
+                Ok(0)
+            }
+            _ => Err(addr),
+        };
+        r.map_err(|_| addr)
+    }
+
+    fn unknown_access(&mut self, addr: u32, write: bool) {
+        self.unknown_count += 1;
+        // One record per (address, direction): the first one, with its PC and time.
+        if self
+            .unknown
+            .iter()
+            .any(|u| u.addr == addr && u.write == write)
+        {
+            return;
+        }
+        let rec = UnknownAccess {
+            addr,
+            pc: self.pc(),
+            write,
+            time_ps: self.now(),
+        };
+        self.unknown.push(rec);
+    }
+}
+
+extern "C" fn mmio_read(_uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_void) -> u64 {
+    // SAFETY: `ud` is the `State` box registered with this region; Unicorn calls back on
+    // the thread running `uc_emu_start`, while `Mcu` holds no other borrow of it.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let addr = region_base(off);
+    match st.read(addr, size) {
+        Ok(v) => u64::from(v >> (8 * (addr & 3))),
+        Err(a) => {
+            st.unknown_access(a, false);
+            0
+        }
+    }
+}
+
+extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let addr = region_base(off);
+    // Byte and half-word writes land in their lane of the 32-bit register.
+    let lane = 8 * (addr & 3);
+    let aligned = addr & !3;
+    let v = if size < 4
+        && !(0xE000_E400..0xE000_E440).contains(&aligned)
+        && !(0xE000_ED18..0xE000_ED24).contains(&aligned)
+    {
+        let old = st.read(aligned, 4).unwrap_or(0);
+        let mask = if size == 1 { 0xFFu32 } else { 0xFFFF } << lane;
+        (old & !mask) | (((v as u32) << lane) & mask)
+    } else {
+        v as u32
+    };
+    let target = if size < 4
+        && ((0xE000_E400..0xE000_E440).contains(&aligned)
+            || (0xE000_ED18..0xE000_ED24).contains(&aligned))
+    {
+        addr
+    } else {
+        aligned
+    };
+    if let Err(a) = st.write(target, size, v) {
+        st.unknown_access(a, true);
+    }
+    // A write to a timer, the bxCAN or the NVIC/SysTick may move the next event or pend an
+    // interrupt: end this run so `run_until` recomputes its horizon and takes it in time.
+    let replan = (0x4000_0000..0x4000_0C00).contains(&aligned)
+        || (0x4000_6400..0x4000_6800).contains(&aligned)
+        || (0xE000_E000..0xE000_F000).contains(&aligned);
+    // Stopping here, inside an instruction, would resume at a stale PC: the code hook
+    // stops cleanly before the next instruction instead.
+    if replan {
+        st.budget = st.budget.min(st.instructions + 1);
+    }
+}
+
+/// The absolute address: the per-region callbacks (`read_apb`, `read_sys`, ...) have
+/// already added their base to the offset Unicorn passes.
+fn region_base(off: u64) -> u32 {
+    off as u32
+}
+
+extern "C" fn on_code(uc: *mut uc_engine, _addr: u64, _size: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    st.instructions += 1;
+    if st.instructions >= st.budget {
+        // SAFETY: `uc` is the engine calling this hook.
+        unsafe { uc_emu_stop(uc) };
+    }
+}
+
+/// `b .` (0xE7FE): a spin that only an interrupt leaves (RTIC's idle without an idle
+/// task). Equivalent to sleeping: time jumps to the next event, PC stays.
+extern "C" fn on_spin(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    st.wfi = true;
+    let here = addr as u32 | 1;
+    // SAFETY: `uc` is the engine calling this hook.
+    unsafe {
+        uc_reg_write(uc, REG_PC, (&here as *const u32).cast());
+        uc_emu_stop(uc);
+    }
+}
+
+extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    st.wfi = true;
+    let next = addr as u32 + 3; // past the 16-bit WFI, Thumb bit set
+                                // SAFETY: `uc` is the engine calling this hook; PC writes in hooks restart there.
+    unsafe {
+        uc_reg_write(uc, REG_PC, (&next as *const u32).cast());
+        uc_emu_stop(uc);
+    }
+}
+
+extern "C" fn on_intr(uc: *mut uc_engine, intno: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    // A branch to EXC_RETURN (0xFFFFFFxx) faults in Unicorn's thread mode (the region is
+    // execute-never): that is the exception return. Anything else is a CPU fault of the image
+    // (UDF of a panic, bad instruction): reported, not modelled as HardFault.
+    let pc = st.pc();
+    if pc >= 0xFFFF_FF00 {
+        st.exc_return = true;
+    } else {
+        st.fault = Some(format!("CPU exception {intno} at pc {pc:#010x}"));
+    }
+    // SAFETY: `uc` is the engine calling this hook.
+    unsafe { uc_emu_stop(uc) };
+}
+
+extern "C" fn on_unmapped(
+    uc: *mut uc_engine,
+    kind: i32,
+    addr: u64,
+    _size: i32,
+    _value: i64,
+    ud: *mut c_void,
+) -> bool {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    if addr as u32 >= 0xFFFF_FF00 {
+        st.exc_return = true;
+    } else {
+        st.unknown_access(addr as u32, kind == 20);
+        st.fault = Some(format!("unmapped access at {addr:#010x}"));
+    }
+    // SAFETY: `uc` is the engine calling this hook.
+    unsafe { uc_emu_stop(uc) };
+    false
+}
+
+/// Why `Mcu::new` failed.
+#[derive(Debug)]
+pub enum EmuError {
+    Elf(elf::BadElf),
+    Unicorn(&'static str, i32),
+}
+
+/// One MCU running one image.
+pub struct Mcu {
+    pub name: String,
+    uc: *mut uc_engine,
+    pub st: Box<State>,
+    image: Vec<elf::Segment>,
+    pub rtt: Option<u32>,
+}
+
+fn check(what: &'static str, e: uc_err) -> Result<(), EmuError> {
+    if e == 0 {
+        Ok(())
+    } else {
+        Err(EmuError::Unicorn(what, e))
+    }
+}
+
+impl Drop for Mcu {
+    fn drop(&mut self) {
+        // SAFETY: `uc` was opened by `new` and is closed once here.
+        unsafe { uc_close(self.uc) };
+    }
+}
+
+impl Mcu {
+    /// An MCU with `elf_bytes` programmed into flash, held in reset.
+    pub fn new(name: &str, elf_bytes: &[u8], timing: Timing) -> Result<Mcu, EmuError> {
+        let image = elf::load_segments(elf_bytes).map_err(EmuError::Elf)?;
+        let rtt = elf::symbol(elf_bytes, "_SEGGER_RTT").map_err(EmuError::Elf)?;
+        let mut uc: *mut uc_engine = core::ptr::null_mut();
+        // SAFETY: plain FFI calls with valid out-pointers; `st` is boxed so the address
+        // given to Unicorn stays valid for the life of `Mcu`, which closes the engine first.
+        unsafe {
+            check(
+                "uc_open",
+                uc_open(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS, &mut uc),
+            )?;
+            check(
+                "cpu model",
+                uc_ctl(uc, UC_CTL_CPU_MODEL_WRITE, UC_CPU_ARM_CORTEX_M3),
+            )?;
+        }
+        let mut st = Box::new(State {
+            timing,
+            instructions: 0,
+            base_ps: 0,
+            base_instr: 0,
+            instr_ps: 0.0,
+            budget: 0,
+            scs: Scs::default(),
+            rcc: Rcc::default(),
+            flash: Flash::default(),
+            gpio: Default::default(),
+            afio: Afio::default(),
+            exti: Exti::default(),
+            tim: [Tim2::new(), Tim2::new(), Tim2::new()],
+            adc1: Adc::new(),
+            can: BxCan::default(),
+            iwdg: Iwdg::new(),
+            usart1: Usart::default(),
+            dma1: Dma::default(),
+            unknown: Vec::new(),
+            txrq_at: None,
+            stop_on_txrq: false,
+            unknown_count: 0,
+            taken: Default::default(),
+            asleep_ps: 0,
+            exc_return: false,
+            wfi: false,
+            fault: None,
+            dbg_cr: 0,
+            bit_ps: 1_000_000,
+            uc,
+        });
+        st.retime();
+        let ud: *mut c_void = (&mut *st as *mut State).cast();
+        // SAFETY: see above.
+        unsafe {
+            check(
+                "map flash",
+                uc_mem_map(uc, u64::from(FLASH_BASE), FLASH_SIZE as usize, UC_PROT_ALL),
+            )?;
+            // Boot from main flash: aliased at 0 (RM0008 §3.4); a copy suffices, flash is read-only.
+            check(
+                "map alias",
+                uc_mem_map(uc, 0, FLASH_SIZE as usize, UC_PROT_ALL),
+            )?;
+            check(
+                "map sram",
+                uc_mem_map(uc, u64::from(SRAM_BASE), SRAM_SIZE as usize, UC_PROT_ALL),
+            )?;
+            // Peripherals and system: the offset passed to the callbacks is made absolute
+            // by mapping each region at its base and adding the base back (`region` fns).
+            for &(base, size) in &[(0x4000_0000u64, 0x3_0000usize), (0xE000_0000, 0x10_0000)] {
+                let (r, w): (MmioRead, MmioWrite) = if base == 0x4000_0000 {
+                    (read_apb, write_apb)
+                } else {
+                    (read_sys, write_sys)
+                };
+                check("mmio", uc_mmio_map(uc, base, size, r, ud, w, ud))?;
+            }
+            // Bit-band aliases (Cortex-M3 TRM §3.7, RM0008 §2.3.2): a word per bit of
+            // the peripheral and SRAM regions.
+            check(
+                "bitband periph",
+                uc_mmio_map(
+                    uc,
+                    0x4200_0000,
+                    0x200_0000,
+                    read_bb_periph,
+                    ud,
+                    write_bb_periph,
+                    ud,
+                ),
+            )?;
+            check(
+                "bitband sram",
+                uc_mmio_map(
+                    uc,
+                    0x2200_0000,
+                    0x200_0000,
+                    read_bb_sram,
+                    ud,
+                    write_bb_sram,
+                    ud,
+                ),
+            )?;
+            let mut h: uc_hook = 0;
+            check(
+                "hook code",
+                uc_hook_add(uc, &mut h, UC_HOOK_CODE, on_code as *mut c_void, ud, 1, 0),
+            )?;
+            check(
+                "hook intr",
+                uc_hook_add(uc, &mut h, UC_HOOK_INTR, on_intr as *mut c_void, ud, 1, 0),
+            )?;
+            check(
+                "hook unmapped",
+                uc_hook_add(
+                    uc,
+                    &mut h,
+                    UC_HOOK_MEM_UNMAPPED,
+                    on_unmapped as *mut c_void,
+                    ud,
+                    1,
+                    0,
+                ),
+            )?;
+        }
+        // WFI sites (0xBF30 at half-word boundaries of the code): a hook each, to sleep.
+        for seg in &image {
+            for (i, hw) in seg.bytes.chunks_exact(2).enumerate() {
+                let hook: *mut c_void = match hw {
+                    [0x30, 0xBF] => on_wfi as *mut c_void,
+                    [0xFE, 0xE7] => on_spin as *mut c_void,
+                    _ => continue,
+                };
+                let a = u64::from(seg.addr) + 2 * i as u64;
+                let mut h: uc_hook = 0;
+                // SAFETY: see above.
+                unsafe {
+                    check(
+                        "hook wfi",
+                        uc_hook_add(uc, &mut h, UC_HOOK_CODE, hook, ud, a, a),
+                    )?
+                };
+            }
+        }
+        let mut mcu = Mcu {
+            name: name.to_string(),
+            uc,
+            st,
+            image,
+            rtt,
+        };
+        mcu.reset()?;
+        Ok(mcu)
+    }
+
+    /// Program counter.
+    pub fn pc(&self) -> u32 {
+        self.reg(REG_PC)
+    }
+
+    fn reg(&self, r: i32) -> u32 {
+        let mut v: u32 = 0;
+        // SAFETY: live engine, valid out-pointer.
+        unsafe { uc_reg_read(self.uc, r, (&mut v as *mut u32).cast()) };
+        v
+    }
+
+    fn set_reg(&mut self, r: i32, v: u32) {
+        // SAFETY: live engine, valid in-pointer.
+        unsafe { uc_reg_write(self.uc, r, (&v as *const u32).cast()) };
+    }
+
+    fn mem_read_u32(&self, addr: u32) -> u32 {
+        let mut b = [0u8; 4];
+        // SAFETY: live engine, `b` is 4 writable bytes.
+        unsafe { uc_mem_read(self.uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+        u32::from_le_bytes(b)
+    }
+
+    fn mem_write_u32(&mut self, addr: u32, v: u32) {
+        let b = v.to_le_bytes();
+        // SAFETY: live engine, `b` is 4 readable bytes.
+        unsafe { uc_mem_write(self.uc, u64::from(addr), b.as_ptr().cast(), 4) };
+    }
+
+    /// Reads emulated memory.
+    pub fn read_mem(&self, addr: u32, len: usize) -> Vec<u8> {
+        let mut b = vec![0u8; len];
+        // SAFETY: live engine, `b` has `len` writable bytes.
+        unsafe { uc_mem_read(self.uc, u64::from(addr), b.as_mut_ptr().cast(), len) };
+        b
+    }
+
+    /// Writes emulated memory (RAM).
+    pub fn write_mem(&mut self, addr: u32, bytes: &[u8]) {
+        // SAFETY: live engine, `bytes` readable for its length.
+        unsafe { uc_mem_write(self.uc, u64::from(addr), bytes.as_ptr().cast(), bytes.len()) };
+    }
+
+    /// Power-on / system reset (ARMv7-M B1.5.5): peripherals to reset values, image in
+    /// flash, SRAM cleared, SP and PC from the vector table at 0. Time goes on.
+    pub fn reset(&mut self) -> Result<(), EmuError> {
+        let now = self.st.now();
+        let st = &mut self.st;
+        st.scs = Scs::default();
+        st.rcc = Rcc::default();
+        st.flash = Flash::default();
+        st.gpio = Default::default();
+        st.afio = Afio::default();
+        st.exti = Exti::default();
+        st.tim = [Tim2::new(), Tim2::new(), Tim2::new()];
+        st.adc1 = Adc::new();
+        st.can = BxCan::default();
+        st.iwdg = Iwdg::new();
+        st.usart1 = Usart::default();
+        st.dma1 = Dma::default();
+        // The core restarts awake, with no exception in progress.
+        st.wfi = false;
+        st.exc_return = false;
+        st.base_ps = now;
+        st.base_instr = st.instructions;
+        st.retime();
+        let zero = vec![0u8; SRAM_SIZE as usize];
+        // SAFETY: live engine; buffers are valid for their lengths.
+        unsafe {
+            check(
+                "clear sram",
+                uc_mem_write(
+                    self.uc,
+                    u64::from(SRAM_BASE),
+                    zero.as_ptr().cast(),
+                    zero.len(),
+                ),
+            )?;
+            for seg in &self.image {
+                check(
+                    "load",
+                    uc_mem_write(
+                        self.uc,
+                        u64::from(seg.addr),
+                        seg.bytes.as_ptr().cast(),
+                        seg.bytes.len(),
+                    ),
+                )?;
+                if seg.addr >= FLASH_BASE && seg.addr < FLASH_BASE + FLASH_SIZE {
+                    let alias = u64::from(seg.addr - FLASH_BASE);
+                    check(
+                        "load alias",
+                        uc_mem_write(self.uc, alias, seg.bytes.as_ptr().cast(), seg.bytes.len()),
+                    )?;
+                }
+            }
+        }
+        let sp = self.mem_read_u32(0);
+        let pc = self.mem_read_u32(4);
+        self.set_reg(REG_SP, sp);
+        self.set_reg(REG_PC, pc & !1);
+        self.set_reg(REG_PRIMASK, 0);
+        self.set_reg(REG_BASEPRI, 0);
+        self.set_reg(REG_LR, 0xFFFF_FFFF);
+        Ok(())
+    }
+
+    /// Emulated time now (ps).
+    pub fn now(&self) -> u64 {
+        self.st.now()
+    }
+
+    /// Interrupt lines of the peripherals into the NVIC (RM0008 §10.1.2, table 63).
+    fn raise_irqs(&mut self) {
+        let now = self.st.now();
+        let clk = self.st.rcc.tim2clk();
+        let st = &mut self.st;
+        // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
+        for (i, t) in st.tim.iter_mut().enumerate() {
+            t.sync(now, clk);
+            if t.irq() {
+                st.scs.set_pending(28 + i);
+            }
+        }
+        let cyc = st.cycles();
+        st.scs.sync_systick(cyc);
+        let bit = now / st.bit_ps.max(1);
+        st.can.tick(bit);
+        let lines = st.can.irq_lines();
+        for (i, irq) in [
+            crate::bxcan::IRQ_TX,
+            crate::bxcan::IRQ_RX0,
+            crate::bxcan::IRQ_RX1,
+            crate::bxcan::IRQ_SCE,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if lines.get(i) == Some(&true) {
+                st.scs.set_pending(irq);
+            }
+        }
+        // EXTI lines 0..4 have their own IRQs 6..10 (table 63).
+        for line in 0..5 {
+            if st.exti.pr & (1 << line) != 0 {
+                st.scs.set_pending(6 + line);
+            }
+        }
+        if st.usart1.irq() {
+            st.scs.set_pending(37);
+        }
+    }
+
+    /// Exception entry (ARMv7-M B1.5.6): stacks R0-R3, R12, LR, return address, xPSR on
+    /// the main stack (8-byte aligned, bit 9 of the stacked xPSR records the padding),
+    /// LR = EXC_RETURN, PC = vector.
+    fn enter(&mut self, exc: u16) {
+        let mut sp = self.reg(REG_SP);
+        let mut xpsr = self.reg(REG_XPSR);
+        let pc = self.reg(REG_PC);
+        let frame = [
+            self.reg(REG_R0),
+            self.reg(REG_R0 + 1),
+            self.reg(REG_R0 + 2),
+            self.reg(REG_R0 + 3),
+            self.reg(REG_R12),
+            self.reg(REG_LR),
+            pc,
+        ];
+        if sp & 4 != 0 {
+            sp -= 4;
+            xpsr |= 1 << 9;
+        } else {
+            xpsr &= !(1 << 9);
+        }
+        sp -= 32;
+        for (i, v) in frame.iter().enumerate() {
+            self.mem_write_u32(sp + 4 * i as u32, *v);
+        }
+        self.mem_write_u32(sp + 28, xpsr | (1 << 24));
+        self.set_reg(REG_SP, sp);
+        // Return to thread mode on the main stack, or to handler mode when nested.
+        let exc_return = if self.st.scs.active.is_empty() {
+            0xFFFF_FFF9
+        } else {
+            0xFFFF_FFF1
+        };
+        self.set_reg(REG_LR, exc_return);
+        let vector = self.mem_read_u32(self.st.scs.vtor + 4 * u32::from(exc));
+        self.set_reg(REG_PC, vector & !1);
+        self.st.scs.activate(exc);
+        *self.st.taken.entry(exc).or_insert(0) += 1;
+        let ps = self.cycles_ps(self.st.timing.exception_cycles);
+        self.st.add_time(ps);
+    }
+
+    fn cycles_ps(&self, cycles: u64) -> u64 {
+        cycles * PS / self.st.rcc.hclk().max(1)
+    }
+
+    /// Exception return (B1.5.8): unstacks the frame and ends the active exception.
+    fn exc_return(&mut self) {
+        let sp = self.reg(REG_SP);
+        let v: Vec<u32> = (0..8).map(|i| self.mem_read_u32(sp + 4 * i)).collect();
+        let get = |i: usize| v.get(i).copied().unwrap_or(0);
+        for (i, r) in [REG_R0, REG_R0 + 1, REG_R0 + 2, REG_R0 + 3, REG_R12, REG_LR]
+            .iter()
+            .enumerate()
+        {
+            self.set_reg(*r, get(i));
+        }
+        self.set_reg(REG_PC, get(6) & !1);
+        let xpsr = get(7);
+        self.set_reg(REG_XPSR, xpsr & !0x1FF);
+        let pad = if xpsr & (1 << 9) != 0 { 4 } else { 0 };
+        self.set_reg(REG_SP, sp + 32 + pad);
+        self.st.scs.deactivate();
+        let ps = self.cycles_ps(self.st.timing.exception_cycles);
+        self.st.add_time(ps);
+        if self.st.scs.active.is_empty() && self.st.scs.sleep_on_exit() {
+            self.st.wfi = true;
+        }
+    }
+
+    fn take_pending(&mut self) -> bool {
+        let primask = self.reg(REG_PRIMASK) & 1 != 0;
+        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
+        let basepri = self.reg(REG_BASEPRI) as u8;
+        let exec = self.st.scs.execution_priority(primask, faultmask, basepri);
+        if let Some(exc) = self.st.scs.next_exception(exec) {
+            self.st.wfi = false;
+            self.enter(exc);
+            return true;
+        }
+        // WFI wakes on any pending interrupt even when masked by PRIMASK (B1.5.19).
+        if self.st.wfi && self.st.scs.next_exception(256).is_some() {
+            self.st.wfi = false;
+        }
+        false
+    }
+
+    /// The next time (ps) a peripheral changes an interrupt line by itself.
+    pub fn next_event(&self) -> Option<u64> {
+        let st = &self.st;
+        let now = st.now();
+        let mut t: Option<u64> = None;
+        for tim in &st.tim {
+            if let Some(at) = tim.next_event(now, st.rcc.tim2clk()) {
+                t = Some(t.map_or(at, |x| x.min(at)));
+            }
+        }
+        let hz = st.rcc.hclk().max(1);
+        if let Some(c) = st.scs.systick_due_in() {
+            let at = now + c * PS / hz;
+            t = Some(t.map_or(at, |x| x.min(at)));
+        }
+        if let Some(b) = st.can.next_event() {
+            let at = b * st.bit_ps;
+            t = Some(t.map_or(at, |x| x.min(at)));
+        }
+        if let Some(d) = st.iwdg.deadline {
+            t = Some(t.map_or(d, |x| x.min(d)));
+        }
+        t
+    }
+
+    /// Runs until emulated time `until` (ps), or a fault.
+    pub fn run_until(&mut self, until: u64) -> Result<(), String> {
+        const CHUNK: u64 = 2_000;
+        while self.st.now() < until {
+            if let Some(f) = &self.st.fault {
+                return Err(f.clone());
+            }
+            if self.st.stop_on_txrq && self.st.txrq_at.is_some() {
+                return Ok(());
+            }
+            if self.st.iwdg.deadline.is_some_and(|d| d <= self.st.now())
+                || self.st.scs.reset_request
+            {
+                self.reset().map_err(|e| format!("{e:?}"))?;
+                continue;
+            }
+            self.raise_irqs();
+            self.take_pending();
+            if self.st.wfi {
+                let next = self
+                    .next_event()
+                    .unwrap_or(until)
+                    .min(until)
+                    .max(self.st.now() + 1);
+                let now = self.st.now();
+                self.st.add_time(next - now);
+                self.st.asleep_ps += next - now;
+                continue;
+            }
+            let horizon = self.next_event().unwrap_or(until).min(until);
+            let left = horizon.saturating_sub(self.st.now());
+            let n = ((left as f64 / self.st.instr_ps.max(1.0)) as u64).clamp(1, CHUNK);
+            self.st.budget = self.st.instructions + n;
+            self.st.scs.reschedule = false;
+            let pc = self.reg(REG_PC);
+            // SAFETY: live engine.
+            let e = unsafe { uc_emu_start(self.uc, u64::from(pc | 1), 0xFFFF_FFFF, 0, 0) };
+            if self.st.exc_return {
+                self.st.exc_return = false;
+                self.exc_return();
+                continue;
+            }
+            if let Some(f) = &self.st.fault {
+                return Err(format!("{}: {f}", self.name));
+            }
+            if e != 0 && !self.st.wfi {
+                let pc = self.reg(REG_PC);
+                return Err(format!(
+                    "{}: CPU fault {e} at pc {pc:#010x} after {} instructions",
+                    self.name, self.st.instructions
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+extern "C" fn read_apb(uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_void) -> u64 {
+    mmio_read(uc, off + 0x4000_0000, size, ud)
+}
+extern "C" fn write_apb(uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *mut c_void) {
+    mmio_write(uc, off + 0x4000_0000, size, v, ud)
+}
+extern "C" fn read_sys(uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_void) -> u64 {
+    mmio_read(uc, off + 0xE000_0000, size, ud)
+}
+extern "C" fn write_sys(uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *mut c_void) {
+    mmio_write(uc, off + 0xE000_0000, size, v, ud)
+}
+
+/// Bit-band alias word `off` → (word address, bit) in the region at `base`.
+fn bitband(base: u32, off: u64) -> (u32, u32) {
+    let byte = (off / 32) as u32;
+    let bit = ((off % 32) / 4) as u32 + 8 * (byte & 3);
+    (base + (byte & !3), bit)
+}
+
+extern "C" fn read_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, ud: *mut c_void) -> u64 {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let (addr, bit) = bitband(0x4000_0000, off);
+    match st.read(addr, 4) {
+        Ok(v) => u64::from((v >> bit) & 1),
+        Err(a) => {
+            st.unknown_access(a, false);
+            0
+        }
+    }
+}
+
+extern "C" fn write_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, v: u64, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let (addr, bit) = bitband(0x4000_0000, off);
+    let r = st.read(addr, 4).and_then(|old| {
+        let new = if v & 1 != 0 {
+            old | (1 << bit)
+        } else {
+            old & !(1 << bit)
+        };
+        st.write(addr, 4, new)
+    });
+    if let Err(a) = r {
+        st.unknown_access(a, true);
+    }
+}
+
+extern "C" fn read_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, _ud: *mut c_void) -> u64 {
+    let (addr, bit) = bitband(SRAM_BASE, off);
+    let mut b = [0u8; 4];
+    // SAFETY: `uc` is the engine calling back; `b` has 4 writable bytes.
+    unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+    u64::from((u32::from_le_bytes(b) >> bit) & 1)
+}
+
+extern "C" fn write_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, v: u64, _ud: *mut c_void) {
+    let (addr, bit) = bitband(SRAM_BASE, off);
+    let mut b = [0u8; 4];
+    // SAFETY: as in `read_bb_sram`.
+    unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+    let old = u32::from_le_bytes(b);
+    let new = if v & 1 != 0 {
+        old | (1 << bit)
+    } else {
+        old & !(1 << bit)
+    };
+    let nb = new.to_le_bytes();
+    // SAFETY: as in `read_bb_sram`.
+    unsafe { uc_mem_write(uc, u64::from(addr), nb.as_ptr().cast(), 4) };
+}

@@ -1,0 +1,363 @@
+//! The six Triskar2 release images (`cd examples/triskar2 && cargo build --release`) on
+//! six emulated STM32F103 on one emulated bus: boot, run, and survive bus faults.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+use rtcan_emu::bus::Bus;
+use rtcan_emu::bxcan::{Mode, RawFrame};
+use rtcan_emu::mcu::{Mcu, Timing};
+use std::path::PathBuf;
+
+const MODULES: [&str; 6] = ["gateway", "motor1", "motor2", "motor3", "proximity", "psu"];
+/// Picoseconds per millisecond.
+const MS: u64 = 1_000_000_000;
+/// Bit time at 1 Mbit/s, ps.
+const BIT: u64 = 1_000_000;
+
+/// The image of module `name`: from `$RTCAN_EMU_IMAGES` if set (a directory of ELF files),
+/// else from the release build of examples/triskar2.
+fn image(name: &str) -> Vec<u8> {
+    let dir = std::env::var_os("RTCAN_EMU_IMAGES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../examples/triskar2/target/thumbv7m-none-eabi/release")
+        });
+    let p = dir.join(name);
+    std::fs::read(&p).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (build the images first: cd examples/triskar2 && cargo build --release)",
+            p.display()
+        )
+    })
+}
+
+fn robot() -> Bus {
+    let mcus = MODULES
+        .iter()
+        .map(|n| Mcu::new(n, &image(n), Timing::default()).unwrap())
+        .collect();
+    Bus::new(mcus, BIT)
+}
+
+fn no_unknown(bus: &Bus) {
+    for m in &bus.mcus {
+        assert_eq!(
+            m.st.unknown,
+            vec![],
+            "{}: unknown register accesses",
+            m.name
+        );
+        assert_eq!(m.st.fault, None, "{}", m.name);
+    }
+}
+
+/// The gateway's cycle: SOF distance of its first two frames with ID < 0x100 (the
+/// cycle-start reference, whose ID counts the cycles).
+fn cycle_bits(bus: &Bus) -> u64 {
+    let refs: Vec<u64> = bus
+        .log
+        .iter()
+        .filter(|(n, f, _)| *n == 0 && f.id < 0x100)
+        .map(|(_, _, s)| *s)
+        .collect();
+    assert!(refs.len() >= 2, "gateway sends its cycle reference");
+    refs[1] - refs[0]
+}
+
+/// CPU time of this thread (Linux `/proc/thread-self/schedstat`, ns), so the speed
+/// figure does not depend on other jobs sharing the machine.
+fn thread_cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(0.0, |ns| ns / 1e9)
+}
+
+/// First SOF (bit time) of a frame with identifier `id`.
+fn first_of(bus: &Bus, id: u32) -> Option<u64> {
+    bus.log
+        .iter()
+        .find(|(_, f, _)| f.id == id)
+        .map(|(_, _, s)| *s)
+}
+
+/// Frames with identifier `id` and SOF in [from, to) bit times.
+fn count_of(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
+    bus.log
+        .iter()
+        .filter(|(_, f, s)| f.id == id && (from..to).contains(s))
+        .count() as u64
+}
+
+// Identifiers of the HRT topics as the images send them (checked against robot.toml's
+// rates in `five_seconds_of_triskar2`): encoder1 0xA200, wheel_setpoints 0xA380/0xA381,
+// encoder3 0xA280, odometry 0xA000..0xA003, proximity 0xA080.
+const ENCODER1: u32 = 0xA200;
+const WHEEL_SETPOINTS: u32 = 0xA380;
+const ENCODER3: u32 = 0xA280;
+const ODOMETRY: u32 = 0xA000;
+const PROXIMITY: u32 = 0xA080;
+
+#[test]
+fn six_images_boot_and_sync_within_three_cycles() {
+    let mut bus = robot();
+    bus.run_until(200 * MS).unwrap();
+    no_unknown(&bus);
+    for m in &bus.mcus {
+        assert_eq!(m.st.rcc.sysclk(), 72_000_000, "{}", m.name);
+        assert_eq!(m.st.rcc.pclk1(), 36_000_000, "{}", m.name);
+        assert_eq!(m.st.can.mode(), Mode::Normal, "{}", m.name);
+        assert_eq!(m.st.bit_ps, BIT, "{}: 1 Mbit/s", m.name);
+    }
+    let cycle = cycle_bits(&bus);
+    // 10 ms (robot.toml) SOF to SOF; the SOF lands on the bit after the TXRQ.
+    assert!(cycle.abs_diff(10_000) <= 1, "cycle of {cycle} bits");
+    let first_ref = bus.log.first().map(|(_, _, s)| *s).unwrap();
+    assert!(
+        first_ref < 1_000,
+        "gateway on the bus within 1 ms of power-on: {first_ref}"
+    );
+    // Each publisher's first HRT frame: within 3 cycles of the first reference, plus its
+    // own period for topics slower than the cycle (it is due once per period).
+    for (id, period_bits) in [
+        (ENCODER1, 0),
+        (WHEEL_SETPOINTS, 0),
+        (ENCODER3, 0),
+        (ODOMETRY, 20_000),
+        (PROXIMITY, 40_000),
+    ] {
+        let at = first_of(&bus, id).unwrap_or(u64::MAX);
+        eprintln!("{id:#x}: first frame at bit {at} (first reference at bit {first_ref})");
+        assert!(
+            at < first_ref + 3 * cycle + period_bits,
+            "{id:#x} first at bit {at}"
+        );
+    }
+}
+
+#[test]
+fn five_seconds_of_triskar2() {
+    let mut bus = robot();
+    let t0 = std::time::Instant::now();
+    let cpu0 = thread_cpu_seconds();
+    bus.run_until(5_000 * MS).unwrap();
+    let wall = t0.elapsed().as_secs_f64();
+    let cpu = thread_cpu_seconds() - cpu0;
+    no_unknown(&bus);
+    // Rates of robot.toml over the last four seconds: each HRT message in every one of its
+    // periods (±1 at the window edges).
+    let (from, to) = (1_000 * MS / BIT, 5_000 * MS / BIT);
+    for (id, hz) in [
+        (ENCODER1, 200),
+        (WHEEL_SETPOINTS, 100),
+        (WHEEL_SETPOINTS + 1, 100),
+        (ENCODER3, 200),
+        (ODOMETRY, 50),
+        (ODOMETRY + 3, 50),
+        (PROXIMITY, 25),
+    ] {
+        let n = count_of(&bus, id, from, to);
+        assert!(
+            n.abs_diff(4 * hz) <= 1,
+            "{id:#x}: {n} frames in 4 s, {hz} Hz expected"
+        );
+    }
+    let refs = bus
+        .log
+        .iter()
+        .filter(|(n, f, s)| *n == 0 && f.id < 0x1000 && (from..to).contains(s))
+        .count();
+    assert!(refs.abs_diff(400) <= 1, "cycle references: {refs}");
+    for m in &bus.mcus {
+        assert_eq!(m.st.can.tec, 0, "{}: no transmit errors", m.name);
+    }
+    eprintln!(
+        "5 s emulated in {cpu:.2} s CPU of one thread ({:.2}x real time; {wall:.2} s wall)",
+        5.0 / cpu
+    );
+}
+
+/// Frames of `id` in [from, to) ms.
+fn count_ms(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
+    count_of(bus, id, from * MS / BIT, to * MS / BIT)
+}
+
+#[test]
+fn bus_off_and_recovery() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    let mcr = bus.mcus[1].st.can.read(0).unwrap();
+    let bit = bus.bit();
+    // 32 transmit errors: TEC 256, bus-off (RM0008 §24.7.6).
+    bus.mcus[1].st.can.inject_tx_errors(32, bit);
+    assert!(bus.mcus[1].st.can.is_bus_off());
+    bus.run_until(600 * MS).unwrap();
+    // Silent until the automatic recovery after 128 x 11 recessive bits.
+    assert_eq!(
+        count_of(&bus, ENCODER1, bit, bit + 128 * 11),
+        0,
+        "bus-off: motor1 silent"
+    );
+    let back = bus
+        .log
+        .iter()
+        .find(|(_, f, s)| f.id == ENCODER1 && *s > bit)
+        .map(|(_, _, s)| *s);
+    let back = back.unwrap_or(u64::MAX);
+    eprintln!("bus-off at bit {bit}, encoder1 back at bit {back}");
+    assert!(
+        back < bit + 128 * 11 + 3 * 10_000,
+        "motor1 back within 3 cycles of its recovery: {back}"
+    );
+    assert!(count_ms(&bus, ENCODER3, 301, 310) >= 1, "the others go on");
+    no_unknown(&bus);
+    assert!(
+        mcr & (1 << 6) != 0,
+        "the board enables automatic bus-off management (ABOM)"
+    );
+    assert!(
+        !bus.mcus[1].st.can.is_bus_off(),
+        "recovered after 128 x 11 recessive bits"
+    );
+    // Back at 200 Hz within three cycles of the recovery.
+    assert!(
+        count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1,
+        "encoder1 after recovery: {}",
+        count_ms(&bus, ENCODER1, 340, 600)
+    );
+}
+
+#[test]
+fn rx_fifo_overrun() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    let bit = bus.bit();
+    // Five frames at once into motor3's FIFO 0 (three fit, RM0008 §24.7.5): overrun.
+    let f = RawFrame {
+        id: WHEEL_SETPOINTS,
+        ide: true,
+        rtr: false,
+        dlc: 8,
+        data: [0; 8],
+    };
+    for i in 0..5 {
+        bus.mcus[3].st.can.receive(&f, bit - 200 + i);
+    }
+    assert_eq!(bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1, 1, "FOVR0");
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert_eq!(
+        bus.mcus[3].st.can.read(0x00C).unwrap() >> 4 & 1,
+        0,
+        "the driver cleared FOVR0"
+    );
+    assert!(
+        count_ms(&bus, ENCODER3, 330, 600).abs_diff(54) <= 1,
+        "motor3 keeps its rate"
+    );
+}
+
+#[test]
+fn module_reset_while_the_bus_runs() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    bus.reset_node(1).unwrap();
+    bus.run_until(305 * MS).unwrap();
+    assert_eq!(count_ms(&bus, ENCODER1, 301, 305), 0, "rebooting");
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert!(
+        count_ms(&bus, ENCODER3, 300, 600).abs_diff(60) <= 1,
+        "motor3 undisturbed"
+    );
+    // Back within three cycles of its reset: every 5 ms from 340 ms on.
+    assert!(
+        count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1,
+        "encoder1: {}",
+        count_ms(&bus, ENCODER1, 340, 600)
+    );
+}
+
+#[test]
+fn frames_queued_at_boot() {
+    let mut bus = robot();
+    bus.run_until(300 * MS).unwrap();
+    bus.reset_node(3).unwrap();
+    // Step until motor3's bxCAN is in normal mode (its start-up code still runs with
+    // interrupts off), then queue frames with SOF stamps from before its clock started.
+    let mut t = 300 * MS;
+    while bus.mcus[3].st.can.mode() != Mode::Normal {
+        t += MS / 100;
+        bus.run_until(t).unwrap();
+        assert!(t < 320 * MS, "motor3 never enabled CAN");
+    }
+    let bit = bus.bit();
+    let f = RawFrame {
+        id: WHEEL_SETPOINTS,
+        ide: true,
+        rtr: false,
+        dlc: 8,
+        data: [0; 8],
+    };
+    for i in 0..3u64 {
+        bus.mcus[3]
+            .st
+            .can
+            .receive(&f, bit.saturating_sub(60_000 + 1_000 * i));
+    }
+    bus.run_until(600 * MS).unwrap();
+    no_unknown(&bus);
+    assert!(
+        count_ms(&bus, ENCODER3, 350, 600).abs_diff(50) <= 1,
+        "encoder3: {}",
+        count_ms(&bus, ENCODER3, 350, 600)
+    );
+}
+
+#[test]
+fn defmt_logs_decoded_per_module() {
+    let mut bus = robot();
+    let mut raw: Vec<Vec<u8>> = vec![Vec::new(); 6];
+    let images: Vec<Vec<u8>> = MODULES.iter().map(|n| image(n)).collect();
+    // When each module logged "safe state cleared" (R2P: sync acquired), to 1 ms.
+    let mut synced_ms: Vec<Option<u64>> = vec![None; 6];
+    for ms in 1..=200 {
+        bus.run_until(ms * MS).unwrap();
+        for (i, m) in bus.mcus.iter_mut().enumerate() {
+            let new = rtcan_emu::rtt::drain(m);
+            if !new.is_empty() {
+                raw[i].extend(new);
+                let lines = rtcan_emu::rtt::decode(&images[i], &raw[i]).unwrap();
+                if synced_ms[i].is_none() && lines.iter().any(|l| l == "INFO safe state cleared") {
+                    synced_ms[i] = Some(ms);
+                }
+            }
+        }
+    }
+    eprintln!("synced at (ms): {synced_ms:?}");
+    // Boot to synced: the line is logged at the app's first poll after sync, so the bound
+    // is 3 bus cycles (30 ms) plus the app's poll period (motors: within the cycle,
+    // proximity 40 ms, psu 100 ms; measured 12-13, 42 and 102 ms).
+    for (i, app_period) in [(1, 0), (2, 0), (3, 0), (4, 40), (5, 100)] {
+        let at = synced_ms[i].unwrap_or(u64::MAX);
+        assert!(at <= 30 + app_period, "{} synced at {at} ms", MODULES[i]);
+    }
+    for (i, name) in MODULES.iter().enumerate() {
+        let lines = rtcan_emu::rtt::decode(&image(name), &raw[i]).unwrap();
+        for l in &lines {
+            eprintln!("[{name}] {l}");
+        }
+        assert!(lines.iter().all(|l| !l.contains("malformed")), "{name}");
+        // module_app.rs logs "<module> up" once the app starts.
+        assert!(
+            lines.contains(&format!("INFO {name} up")),
+            "{name}: {lines:?}"
+        );
+    }
+    // Draining twice gives nothing new: the read offset was written back.
+    assert!(rtcan_emu::rtt::drain(&mut bus.mcus[0]).is_empty());
+}
