@@ -140,7 +140,7 @@ fn the_host_drives_the_simulated_robot_through_teleop() {
         .iter()
         .filter(|(n, _)| n == "odometry")
         .filter_map(|(_, v)| v["x"].as_f64())
-        .last()
+        .next_back()
         .unwrap();
     assert!(x > 0.3 && x < 0.8, "odometry x {x}");
     assert!(link.pose_m().0 > 0.3, "{:?}", link.pose_m());
