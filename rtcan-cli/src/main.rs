@@ -1,6 +1,11 @@
 //! The `rtcan` command. One file per subcommand; this file only dispatches.
 mod check;
 mod decode;
+mod echo;
+mod link_args;
+mod monitor;
+mod pub_;
+mod record;
 mod sim;
 
 const USAGE: &str = "\
@@ -15,6 +20,12 @@ commands:
                                 `rtcan sim --help`)
   decode <log|-> (--robot robot.toml | --scenario rtcan-paper) [--force]
                                 candump log -> topic-level messages (`rtcan decode --help`)
+  echo TOPIC [--json]           print a topic's messages as they arrive (`rtcan echo --help`)
+  pub TOPIC JSON                publish a value from the host (`rtcan pub --help`)
+  record FILE                   write the bus to a candump log (`rtcan record --help`)
+  monitor [--once]              modules, topics and bus load (`rtcan monitor --help`)
+                                these four take the bus as --sim robot.toml (default),
+                                --replay LOG, --serial PORT or --can IFACE
   help                          this text
 ";
 
@@ -36,6 +47,10 @@ fn run(args: &[String]) -> i32 {
         "check" => check::run(rest),
         "sim" => sim::run(rest),
         "decode" => decode::run(rest),
+        "echo" => echo::run(rest),
+        "pub" => pub_::run(rest),
+        "record" => record::run(rest),
+        "monitor" => monitor::run(rest),
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0
@@ -46,4 +61,10 @@ fn run(args: &[String]) -> i32 {
             2
         }
     }
+}
+
+/// Reports a usage error with the subcommand's usage; exit code 2.
+fn usage_error(what: &str, usage: &str) -> i32 {
+    eprintln!("error: {what}\n\n{usage}");
+    2
 }
