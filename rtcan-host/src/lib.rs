@@ -14,9 +14,11 @@
     )
 )]
 
+pub mod gateway;
 pub mod link;
 pub mod monitor;
 pub mod replay;
+pub mod serial;
 pub mod sim;
 pub mod value;
 

@@ -48,10 +48,10 @@ pub fn open(
     match source {
         Source::Sim(_) => Ok(Box::new(crate::sim::SimLink::start(plan, speed)?)),
         Source::Replay(p) => Ok(Box::new(crate::replay::ReplayLink::open(p, speed)?)),
-        Source::Serial(port) => Err(format!(
-            "--serial {port}: the gateway serial link backend is not built into this rtcan \
-             (reach the robot with --sim ROBOT.toml or --replay LOG)"
-        )),
+        Source::Serial(port) => Ok(Box::new(crate::serial::SerialLink::open(
+            port,
+            &rtcan_sim::decode::plan_catalog(plan),
+        )?)),
         Source::Can(iface) => Err(format!(
             "--can {iface}: SocketCAN is not built into this rtcan \
              (reach the robot with --sim ROBOT.toml or --replay LOG; \
