@@ -75,7 +75,10 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
                 frame: s.frame,
                 standard: false,
             };
-            let Some(Decoded::Message { topic: t, payload, .. }) = self.bus.push(&e) else {
+            let Some(Decoded::Message {
+                topic: t, payload, ..
+            }) = self.bus.push(&e)
+            else {
                 continue;
             };
             let name = self.cat.topics.get(t).map_or("", |t| t.name.as_str());

@@ -24,7 +24,10 @@ pub fn make_raw(fd: i32) -> Result<(), String> {
     unsafe {
         let mut t: libc::termios = std::mem::zeroed();
         if libc::tcgetattr(fd, &mut t) != 0 {
-            return Err(format!("not a terminal: {}", std::io::Error::last_os_error()));
+            return Err(format!(
+                "not a terminal: {}",
+                std::io::Error::last_os_error()
+            ));
         }
         libc::cfmakeraw(&mut t);
         t.c_cc[libc::VMIN] = 0;
