@@ -81,7 +81,7 @@ fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
             while i < out.len() {
                 if out[i] == 0 {
                     delimiters += 1;
-                    if delimiters % 40 == 0 && i >= 7 {
+                    if delimiters.is_multiple_of(40) && i >= 7 {
                         out.remove(i - 7);
                         dropped += 1;
                         i -= 1;
