@@ -194,3 +194,100 @@ fn usage_errors_exit_2_and_unavailable_buses_exit_1() {
         assert!(out.contains(&format!("usage: rtcan {c}")), "{out}");
     }
 }
+
+/// A pty pair with the simulated robot's gateway on the master side (five times real
+/// time) until `stop`; the slave's path.
+fn gateway_on_pty(
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> (
+    String,
+    std::thread::JoinHandle<(triskar2_link::LinkStats, (f64, f64))>,
+) {
+    use std::os::fd::FromRawFd;
+    let (mut m, mut s) = (0, 0);
+    let mut name = [0 as libc::c_char; 128];
+    // SAFETY: out-pointers to locals; the buffer holds any /dev/pts/N.
+    let rc = unsafe {
+        libc::openpty(
+            &mut m,
+            &mut s,
+            name.as_mut_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(rc, 0);
+    // SAFETY: m is open and ours.
+    unsafe {
+        let fl = libc::fcntl(m, libc::F_GETFL);
+        libc::fcntl(m, libc::F_SETFL, fl | libc::O_NONBLOCK);
+    }
+    // SAFETY: NUL-terminated by openpty.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_str()
+        .unwrap()
+        .to_string();
+    // SAFETY: both fds are open; the Files own them from here on.
+    let (master, slave) = unsafe { (std::fs::File::from_raw_fd(m), std::fs::File::from_raw_fd(s)) };
+    let h = std::thread::spawn(move || {
+        let _slave = slave;
+        let plan = rtcan_model::Robot::load(root().join("robot.toml"))
+            .map_err(|d| d.render())
+            .unwrap();
+        let cat = rtcan_sim::decode::plan_catalog(&plan);
+        let robot = rtcan_host::sim::SimLink::start(&plan, 5.0).unwrap();
+        let mut gw = rtcan_host::gateway::SimGateway::new(robot, master, &cat);
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            gw.step(&mut |_| {}).unwrap();
+        }
+        (gw.stats(), gw.pose_m())
+    });
+    (path, h)
+}
+
+#[test]
+fn echo_and_pub_over_the_gateway_serial_link() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let (pty, gw) = gateway_on_pty(stop.clone());
+    let (code, out, err) = rtcan(&[
+        "echo", "odometry", "--json", "--count", "3", "--serial", &pty,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3, "{out}");
+    assert_eq!(lines[0]["value"]["x"], 0.0);
+    let (code, out, err) = rtcan(&[
+        "pub",
+        "teleop",
+        r#"{"vx":0.4,"vy":0,"wz":0}"#,
+        "--serial",
+        &pty,
+        "--seconds",
+        "0.2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("published teleop"), "{out}");
+    let (code, out, err) = rtcan(&["monitor", "--once", "--serial", &pty, "--seconds", "0.5"]);
+    assert_eq!(code, 0, "{err}");
+    // The link carries odometry and proximity (no heartbeats: the gateway forwards topics).
+    let row = out.lines().find(|l| l.starts_with("odometry")).unwrap();
+    assert!(
+        row.split_whitespace()
+            .nth(2)
+            .unwrap()
+            .parse::<u64>()
+            .unwrap()
+            > 0,
+        "{row}"
+    );
+    stop.store(true, Ordering::Relaxed);
+    let (stats, pose) = gw.join().unwrap();
+    assert_eq!(stats.frames, 1, "{stats:?}");
+    assert_eq!(stats.malformed + stats.bad_check, 0, "{stats:?}");
+    // The command reached the robot: it moved forward.
+    assert!(pose.0 > 0.01, "{pose:?}");
+}
