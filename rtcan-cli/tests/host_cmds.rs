@@ -195,14 +195,12 @@ fn usage_errors_exit_2_and_unavailable_buses_exit_1() {
     }
 }
 
+/// The gateway thread's result: its link counters and the robot's final pose.
+type GatewayDone = std::thread::JoinHandle<(triskar2_link::LinkStats, (f64, f64))>;
+
 /// A pty pair with the simulated robot's gateway on the master side (five times real
 /// time) until `stop`; the slave's path.
-fn gateway_on_pty(
-    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
-) -> (
-    String,
-    std::thread::JoinHandle<(triskar2_link::LinkStats, (f64, f64))>,
-) {
+fn gateway_on_pty(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> (String, GatewayDone) {
     use std::os::fd::FromRawFd;
     let (mut m, mut s) = (0, 0);
     let mut name = [0 as libc::c_char; 128];
