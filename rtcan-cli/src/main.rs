@@ -1,4 +1,5 @@
 //! The `rtcan` command. One file per subcommand; this file only dispatches.
+mod bridge;
 mod check;
 mod decode;
 mod echo;
@@ -26,6 +27,8 @@ commands:
   monitor [--once]              modules, topics and bus load (`rtcan monitor --help`)
                                 these four take the bus as --sim robot.toml (default),
                                 --replay LOG, --serial PORT or --can IFACE
+  bridge [--listen E] [--connect E]   every topic on Zenoh, rtcan/<robot>/<topic>
+                                (`rtcan bridge --help`, docs/BRIDGE.md)
   help                          this text
 ";
 
@@ -51,6 +54,7 @@ fn run(args: &[String]) -> i32 {
         "pub" => pub_::run(rest),
         "record" => record::run(rest),
         "monitor" => monitor::run(rest),
+        "bridge" => bridge::run(rest),
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0
