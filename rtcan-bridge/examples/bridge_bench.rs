@@ -76,10 +76,10 @@ fn main() {
         if !bridge.step(&mut link).unwrap() {
             break;
         }
-        if bridge.counts.published > before {
-            if sub.recv_timeout(Duration::from_secs(2)).unwrap().is_some() {
-                lat.push(t0.elapsed());
-            }
+        if bridge.counts.published > before
+            && sub.recv_timeout(Duration::from_secs(2)).unwrap().is_some()
+        {
+            lat.push(t0.elapsed());
         }
     }
     drop(sub);
