@@ -55,6 +55,10 @@ fn run(args: &[String]) -> i32 {
         "record" => record::run(rest),
         "monitor" => monitor::run(rest),
         "bridge" => bridge::run(rest),
+        "--version" | "-V" => {
+            println!("rtcan {}", env!("CARGO_PKG_VERSION"));
+            0
+        }
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0

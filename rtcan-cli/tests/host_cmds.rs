@@ -188,7 +188,12 @@ fn usage_errors_exit_2_and_unavailable_buses_exit_1() {
     let (code, _, err) = rtcan(&["echo", "odometry", "--replay", "/nonexistent.log"]);
     assert_eq!(code, 1);
     assert!(err.contains("/nonexistent.log"), "{err}");
-    for c in ["echo", "pub", "record", "monitor"] {
+    let (code, out, _) = rtcan(&["--version"]);
+    assert_eq!(
+        (code, out.as_str()),
+        (0, concat!("rtcan ", env!("CARGO_PKG_VERSION"), "\n"))
+    );
+    for c in ["echo", "pub", "record", "monitor", "bridge"] {
         let (code, out, _) = rtcan(&[c, "--help"]);
         assert_eq!(code, 0);
         assert!(out.contains(&format!("usage: rtcan {c}")), "{out}");
