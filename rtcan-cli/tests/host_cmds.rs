@@ -230,6 +230,9 @@ fn gateway_on_pty(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> (Strin
         .to_str()
         .unwrap()
         .to_string();
+    // A serial port is configured before anyone talks on it: raw, no echo (a pty
+    // starts cooked and would echo the gateway's frames back to it).
+    rtcan_host::serial::make_raw(s).unwrap();
     // SAFETY: both fds are open; the Files own them from here on.
     let (master, slave) = unsafe { (std::fs::File::from_raw_fd(m), std::fs::File::from_raw_fd(s)) };
     let h = std::thread::spawn(move || {

@@ -58,6 +58,9 @@ fn pty() -> (File, File, String) {
         .to_str()
         .unwrap()
         .to_string();
+    // A serial port is configured before anyone talks on it: raw, no echo (a pty
+    // starts cooked and would echo the gateway's frames back to it).
+    rtcan_host::serial::make_raw(s).unwrap();
     // SAFETY: both fds are open and owned from here on by the Files.
     unsafe { (File::from_raw_fd(m), File::from_raw_fd(s), path) }
 }
