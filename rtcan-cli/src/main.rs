@@ -1,8 +1,14 @@
 //! The `rtcan` command. One file per subcommand; this file only dispatches.
+mod bridge;
 mod check;
 mod decode;
+mod echo;
 mod emulate;
+mod link_args;
+mod monitor;
 mod out;
+mod pub_;
+mod record;
 mod sim;
 
 const USAGE: &str = "\
@@ -18,6 +24,14 @@ commands:
                                 `rtcan sim --help`)
   decode <log|-> (--robot robot.toml | --scenario rtcan-paper) [--force]
                                 candump log -> topic-level messages (`rtcan decode --help`)
+  echo TOPIC [--json]           print a topic's messages as they arrive (`rtcan echo --help`)
+  pub TOPIC JSON                publish a value from the host (`rtcan pub --help`)
+  record FILE                   write the bus to a candump log (`rtcan record --help`)
+  monitor [--once]              modules, topics and bus load (`rtcan monitor --help`)
+                                these four take the bus as --sim robot.toml (default),
+                                --replay LOG, --serial PORT or --can IFACE
+  bridge [--listen E] [--connect E]   every topic on Zenoh, rtcan/<robot>/<topic>
+                                (`rtcan bridge --help`, docs/BRIDGE.md)
   help                          this text
 ";
 
@@ -39,6 +53,15 @@ fn run(args: &[String]) -> i32 {
         "check" => check::run(rest),
         "sim" => sim::run(rest),
         "decode" => decode::run(rest),
+        "echo" => echo::run(rest),
+        "pub" => pub_::run(rest),
+        "record" => record::run(rest),
+        "monitor" => monitor::run(rest),
+        "bridge" => bridge::run(rest),
+        "--version" | "-V" => {
+            println!("rtcan {}", env!("CARGO_PKG_VERSION"));
+            0
+        }
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0
@@ -49,4 +72,10 @@ fn run(args: &[String]) -> i32 {
             2
         }
     }
+}
+
+/// Reports a usage error with the subcommand's usage; exit code 2.
+fn usage_error(what: &str, usage: &str) -> i32 {
+    eprintln!("error: {what}\n\n{usage}");
+    2
 }

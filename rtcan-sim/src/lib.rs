@@ -23,6 +23,7 @@ pub mod decode;
 pub mod fixed;
 pub mod histogram;
 pub mod ideal;
+pub mod live;
 pub mod metrics;
 pub mod paper;
 pub mod plant;

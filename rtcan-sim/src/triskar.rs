@@ -113,7 +113,7 @@ impl TriskarRun {
 }
 
 /// One triskar2 simulation at a time per process (the topics are statics).
-static LOCK: Mutex<()> = Mutex::new(());
+pub(crate) static LOCK: Mutex<()> = Mutex::new(());
 
 /// Module names in bus-index order (= module INDEX of the generated code).
 pub const MODULES: [&str; 6] = ["gateway", "motor1", "motor2", "motor3", "proximity", "psu"];
@@ -136,7 +136,7 @@ pub fn check_plan(plan: &Plan) -> Result<(), String> {
     Ok(())
 }
 
-fn reset_all() {
+pub(crate) fn reset_all() {
     // The generated code resets every module's topics, status and nodes.
     rtcan::robot_toml::reset();
 }
@@ -170,21 +170,30 @@ fn s_to_ns(s: f64) -> Nanos {
     (s.max(0.0) * 1e9) as Nanos
 }
 
-fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
+/// The robot and the host link's state, shared by every module of one run.
+pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
     let world = World::new().with_wall((cfg.wall_x_m, -2.0), (cfg.wall_x_m, 2.0));
-    let shared = Rc::new(RefCell::new(Shared {
+    Rc::new(RefCell::new(Shared {
         physics: Physics::new(world, cfg.sim.seed),
         script: Script {
             vx: cfg.command_vx,
             from_ns: s_to_ns(cfg.command_from_s),
             until_ns: s_to_ns(cfg.command_until_s),
+            host: None,
         },
         odometry: crate::decimate::Decimated::default(),
         proximity_rx: 0,
         battery_rx: 0,
         log_rx: 0,
         last_log: String::new(),
-    }));
+    }))
+}
+
+/// The six modules on a fresh bus, each with its firmware's generated filters.
+pub(crate) fn build_bus(
+    cfg: &TriskarConfig,
+    shared: &Rc<RefCell<Shared>>,
+) -> Bus<Box<dyn TriskarModule>> {
     let bitrate = robot::BUS.bitrate;
     let mut bus: Bus<Box<dyn TriskarModule>> =
         Bus::new(bitrate, cfg.sim.bit_error_rate, cfg.sim.seed);
@@ -282,6 +291,12 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             },
         );
     }
+    bus
+}
+
+fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
+    let shared = new_shared(cfg);
+    let mut bus = build_bus(cfg, &shared);
     let end = cfg.sim.end_ns();
     let win = window(&cfg.sim);
     let mut meter = Meter::new(&sc.topics, win, bus.bit_ns());

@@ -45,10 +45,15 @@ pub struct Script {
     pub from_ns: Nanos,
     /// ...until this one (then zero is sent).
     pub until_ns: Nanos,
+    /// A live host's command (`rtcan_sim::live`): replaces the script while set.
+    pub host: Option<Twist>,
 }
 
 impl Script {
     fn command(&self, g: Nanos) -> Twist {
+        if let Some(t) = self.host {
+            return t;
+        }
         let vx = if g >= self.from_ns && g < self.until_ns {
             self.vx
         } else {

@@ -1,12 +1,16 @@
-//! The gateway's serial link to the host (ROS side): topic-tagged frames.
+//! The gateway's serial link to the host (ROS side): topic-tagged frames, COBS-stuffed,
+//! checked by CRC-16, each ended by a zero byte.
 //!
 //! ```text
-//! 0xA5 0x5A  topic  len  payload[len]  f16_lo f16_hi
+//! COBS( topic  payload[n]  crc_lo crc_hi )  0x00
 //! ```
-//! `topic` is a [`topic`] number, `len` ≤ [`MAX_PAYLOAD`], and the
-//! Fletcher-16 check covers `topic`, `len` and the payload. Two sync bytes plus the
-//! check let the decoder resynchronise after a lost byte without escaping (a UART link
-//! loses whole bytes, it does not flip runs of them). HAL-free and host-tested.
+//! `topic` is a [`topic`] number, `n` ≤ [`MAX_PAYLOAD`], and the CRC-16/CCITT-FALSE
+//! (poly 0x1021, init 0xFFFF) covers `topic` and the payload. COBS leaves no zero byte
+//! inside a frame, so the zero delimiter always marks a frame end: after any lost,
+//! added or changed byte the decoder drops at most the frame it is in and is in step
+//! again at the next delimiter. The CRC catches what a sum cannot: every error burst up
+//! to 16 bits, so also a byte turned from 0x00 into 0xFF (a Fletcher-16 mod 255 check
+//! cannot tell 0x00 from 0xFF). HAL-free and host-tested.
 #![cfg_attr(not(test), no_std)]
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::indexing_slicing))]
 
@@ -23,59 +27,93 @@ pub mod topic {
     pub const BATTERY: u8 = 4;
     /// Robot → host: `LogLine`.
     pub const LOG: u8 = 5;
+
+    /// The robot.toml topic each link topic carries.
+    pub const NAMES: [(u8, &str); 5] = [
+        (TELEOP, "teleop"),
+        (ODOMETRY, "odometry"),
+        (PROXIMITY, "proximity"),
+        (BATTERY, "battery"),
+        (LOG, "log"),
+    ];
 }
 
-/// First sync byte.
-pub const SYNC0: u8 = 0xA5;
-/// Second sync byte.
-pub const SYNC1: u8 = 0x5A;
+/// Frame delimiter.
+pub const DELIMITER: u8 = 0x00;
 /// Largest payload (the biggest Triskar2 message, `LogLine`, is 32 bytes).
 pub const MAX_PAYLOAD: usize = 32;
-/// Header (2 sync + topic + len) and trailer (check) bytes.
-pub const OVERHEAD: usize = 6;
+/// Bytes a frame adds to its payload: topic, 2 CRC, 1 COBS code byte (a frame of at most
+/// 254 bytes needs one), the delimiter.
+pub const OVERHEAD: usize = 5;
+/// Unstuffed frame: topic, payload, CRC.
+const RAW_MAX: usize = MAX_PAYLOAD + 3;
 
-/// Fletcher-16 over `bytes` (sums mod 255), continuing from `(a, b)`.
-const fn fletcher(mut a: u16, mut b: u16, bytes: &[u8]) -> (u16, u16) {
+/// CRC-16/CCITT-FALSE of `bytes`, continuing from `crc` (start with 0xFFFF).
+pub const fn crc16(mut crc: u16, bytes: &[u8]) -> u16 {
     let mut rest = bytes;
     while let [x, tail @ ..] = rest {
-        a = (a + *x as u16) % 255;
-        b = (b + a) % 255;
+        crc ^= (*x as u16) << 8;
+        let mut k = 0;
+        while k < 8 {
+            crc = if crc & 0x8000 != 0 {
+                (crc << 1) ^ 0x1021
+            } else {
+                crc << 1
+            };
+            k += 1;
+        }
         rest = tail;
     }
-    (a, b)
+    crc
 }
 
 fn check(topic: u8, payload: &[u8]) -> [u8; 2] {
-    let (a, b) = fletcher(0, 0, &[topic, payload.len() as u8]);
-    let (a, b) = fletcher(a, b, payload);
-    [a as u8, b as u8]
+    crc16(crc16(0xFFFF, &[topic]), payload).to_le_bytes()
 }
 
-/// Writes the frame of `payload` on `topic` into `out`; returns its length, or `None`
-/// when the payload is too long or `out` too short.
+/// COBS-encodes `raw` into `out` (no delimiter); returns the length, `None` if `out` is
+/// too short.
+fn cobs_encode(raw: &[u8], out: &mut [u8]) -> Option<usize> {
+    let mut code_at = 0;
+    let mut w = 1;
+    let mut code: u8 = 1;
+    for &b in raw {
+        if b == 0 {
+            *out.get_mut(code_at)? = code;
+            code_at = w;
+            w += 1;
+            code = 1;
+        } else {
+            *out.get_mut(w)? = b;
+            w += 1;
+            code += 1;
+            if code == 0xFF {
+                *out.get_mut(code_at)? = code;
+                code_at = w;
+                w += 1;
+                code = 1;
+            }
+        }
+    }
+    *out.get_mut(code_at)? = code;
+    Some(w)
+}
+
+/// Writes the frame of `payload` on `topic`, delimiter included, into `out`; returns its
+/// length, or `None` when the payload is too long or `out` too short.
 pub fn encode(topic: u8, payload: &[u8], out: &mut [u8]) -> Option<usize> {
     let n = payload.len();
     if n > MAX_PAYLOAD {
         return None;
     }
-    let frame = out.get_mut(..n + OVERHEAD)?;
-    let (head, rest) = frame.split_at_mut(4);
-    head.copy_from_slice(&[SYNC0, SYNC1, topic, n as u8]);
-    let (body, tail) = rest.split_at_mut(n);
-    body.copy_from_slice(payload);
-    tail.copy_from_slice(&check(topic, payload));
-    Some(n + OVERHEAD)
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum State {
-    Sync0,
-    Sync1,
-    Topic,
-    Len,
-    Payload,
-    Check0,
-    Check1,
+    let mut raw = [0u8; RAW_MAX];
+    *raw.first_mut()? = topic;
+    raw.get_mut(1..1 + n)?.copy_from_slice(payload);
+    raw.get_mut(1 + n..3 + n)?
+        .copy_from_slice(&check(topic, payload));
+    let len = cobs_encode(raw.get(..3 + n)?, out)?;
+    *out.get_mut(len)? = DELIMITER;
+    Some(len + 1)
 }
 
 /// Link error counters (saturating).
@@ -83,23 +121,24 @@ enum State {
 pub struct LinkStats {
     /// Frames accepted.
     pub frames: u32,
-    /// Frames whose check failed.
+    /// Frames whose CRC failed.
     pub bad_check: u32,
-    /// Frames announcing more than `MAX_PAYLOAD` bytes.
+    /// Frames longer than the largest payload allows (bytes dropped up to the delimiter).
     pub too_long: u32,
-    /// Bytes skipped while looking for a frame start.
-    pub skipped: u32,
+    /// Frames that were not valid COBS or too short to hold a topic and a CRC.
+    pub malformed: u32,
 }
 
-/// Byte-at-a-time decoder (feed it from the UART RX interrupt).
+/// Byte-at-a-time decoder (feed it from the UART RX interrupt or DMA ring).
 #[derive(Clone, Debug)]
 pub struct Decoder {
-    state: State,
-    topic: u8,
-    len: usize,
+    /// Stuffed bytes of the frame so far.
+    buf: [u8; RAW_MAX + 1],
     got: usize,
-    check0: u8,
-    buf: [u8; MAX_PAYLOAD],
+    /// Dropping bytes until the next delimiter (frame too long).
+    overflow: bool,
+    /// Unstuffed frame handed out by `push`.
+    raw: [u8; RAW_MAX],
     stats: LinkStats,
 }
 
@@ -110,20 +149,18 @@ impl Default for Decoder {
 }
 
 impl Decoder {
-    /// Waiting for a frame start.
+    /// Waiting for a frame.
     pub const fn new() -> Self {
         Decoder {
-            state: State::Sync0,
-            topic: 0,
-            len: 0,
+            buf: [0; RAW_MAX + 1],
             got: 0,
-            check0: 0,
-            buf: [0; MAX_PAYLOAD],
+            overflow: false,
+            raw: [0; RAW_MAX],
             stats: LinkStats {
                 frames: 0,
                 bad_check: 0,
                 too_long: 0,
-                skipped: 0,
+                malformed: 0,
             },
         }
     }
@@ -135,65 +172,68 @@ impl Decoder {
 
     /// Feeds one byte; a complete, checked frame comes back as `(topic, payload)`.
     pub fn push(&mut self, byte: u8) -> Option<(u8, &[u8])> {
-        match self.state {
-            State::Sync0 => {
-                if byte == SYNC0 {
-                    self.state = State::Sync1;
-                } else {
-                    bump(&mut self.stats.skipped);
-                }
-            }
-            State::Sync1 => {
-                self.state = match byte {
-                    SYNC1 => State::Topic,
-                    SYNC0 => State::Sync1,
-                    _ => {
-                        bump(&mut self.stats.skipped);
-                        State::Sync0
-                    }
-                };
-            }
-            State::Topic => {
-                self.topic = byte;
-                self.state = State::Len;
-            }
-            State::Len => {
-                self.len = usize::from(byte);
-                self.got = 0;
-                self.state = if self.len > MAX_PAYLOAD {
-                    bump(&mut self.stats.too_long);
-                    State::Sync0
-                } else if self.len == 0 {
-                    State::Check0
-                } else {
-                    State::Payload
-                };
-            }
-            State::Payload => {
-                if let Some(b) = self.buf.get_mut(self.got) {
+        if byte != DELIMITER {
+            match self.buf.get_mut(self.got) {
+                Some(b) if !self.overflow => {
                     *b = byte;
+                    self.got += 1;
                 }
-                self.got += 1;
-                if self.got >= self.len {
-                    self.state = State::Check0;
+                _ => {
+                    if !self.overflow {
+                        bump(&mut self.stats.too_long);
+                    }
+                    self.overflow = true;
                 }
             }
-            State::Check0 => {
-                self.check0 = byte;
-                self.state = State::Check1;
-            }
-            State::Check1 => {
-                self.state = State::Sync0;
-                let payload = self.buf.get(..self.len)?;
-                if check(self.topic, payload) == [self.check0, byte] {
-                    bump(&mut self.stats.frames);
-                    return Some((self.topic, payload));
-                }
-                bump(&mut self.stats.bad_check);
-            }
+            return None;
         }
-        None
+        let (got, overflow) = (self.got, self.overflow);
+        self.got = 0;
+        self.overflow = false;
+        if overflow || got == 0 {
+            // The tail of an overlong frame, or an empty frame (two delimiters in a row:
+            // a sender may lead with one to flush a half-received frame).
+            return None;
+        }
+        let Some(n) = cobs_decode(self.buf.get(..got)?, &mut self.raw) else {
+            bump(&mut self.stats.malformed);
+            return None;
+        };
+        if n < 3 {
+            bump(&mut self.stats.malformed);
+            return None;
+        }
+        let (topic, rest) = self.raw.get(..n)?.split_first()?;
+        let (payload, crc) = rest.split_at(n - 3);
+        if check(*topic, payload) != crc {
+            bump(&mut self.stats.bad_check);
+            return None;
+        }
+        bump(&mut self.stats.frames);
+        Some((*topic, payload))
     }
+}
+
+/// COBS-decodes `src` (no delimiter) into `out`; `None` if `src` is not valid COBS.
+fn cobs_decode(src: &[u8], out: &mut [u8]) -> Option<usize> {
+    let (mut r, mut w) = (0, 0);
+    while r < src.len() {
+        let code = usize::from(*src.get(r)?);
+        if code == 0 || r + code > src.len() {
+            return None;
+        }
+        r += 1;
+        for _ in 1..code {
+            *out.get_mut(w)? = *src.get(r)?;
+            r += 1;
+            w += 1;
+        }
+        if code != 0xFF && r < src.len() {
+            *out.get_mut(w)? = 0;
+            w += 1;
+        }
+    }
+    Some(w)
 }
 
 fn bump(c: &mut u32) {
@@ -211,49 +251,122 @@ mod tests {
             .collect()
     }
 
+    fn enc(topic: u8, payload: &[u8]) -> Vec<u8> {
+        let mut out = [0u8; MAX_PAYLOAD + OVERHEAD];
+        let n = encode(topic, payload, &mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    #[test]
+    fn crc_is_ccitt_false() {
+        // The catalogue check value of CRC-16/CCITT-FALSE.
+        assert_eq!(crc16(0xFFFF, b"123456789"), 0x29B1);
+    }
+
     #[test]
     fn encodes_known_bytes() {
-        let mut out = [0u8; 16];
-        let n = encode(0x48, &[1, 2, 3], &mut out).unwrap();
-        // Fletcher-16 over 48 03 01 02 03: running sums a = 48 4B 4C 4E 51, so a = 0x51
-        // and b = (0x48 + 0x4B + 0x4C + 0x4E + 0x51) mod 255 = 0x7F.
-        assert_eq!(&out[..n], &[0xA5, 0x5A, 0x48, 3, 1, 2, 3, 0x51, 0x7F]);
+        // Raw 48 01 00 03 + CRC; the zero is stuffed away.
+        let crc = crc16(0xFFFF, &[0x48, 0x01, 0x00, 0x03]).to_le_bytes();
+        // This input's CRC has no zero byte (one would be stuffed too).
+        assert!(crc.iter().all(|&b| b != 0));
+        let want = vec![0x03, 0x48, 0x01, 0x04, 0x03, crc[0], crc[1], 0x00];
+        assert_eq!(enc(0x48, &[0x01, 0x00, 0x03]), want);
+        // No zero anywhere but the delimiter, even for an all-zero payload.
+        let z = enc(0, &[0; MAX_PAYLOAD]);
+        assert_eq!(z.len(), MAX_PAYLOAD + OVERHEAD);
+        assert_eq!(z.iter().filter(|&&b| b == 0).count(), 1);
+        assert_eq!(*z.last().unwrap(), 0);
     }
 
     #[test]
-    fn round_trip_and_resync_after_garbage() {
-        let mut wire = vec![0x00, 0xA5, 0x13, 0xA5];
-        let mut out = [0u8; 40];
-        let n = encode(0x40, &[9; 24], &mut out).unwrap();
-        wire.extend_from_slice(&out[..n]);
-        let n = encode(0x43, &[], &mut out).unwrap();
-        wire.extend_from_slice(&out[..n]);
+    fn round_trip_every_length_and_value() {
         let mut d = Decoder::new();
-        let got = frames(&mut d, &wire);
-        assert_eq!(got, vec![(0x40, vec![9; 24]), (0x43, vec![])]);
-        assert_eq!(d.stats().frames, 2);
-        assert_eq!(d.stats().skipped, 2);
+        for n in 0..=MAX_PAYLOAD {
+            for fill in [0u8, 1, 0xFF, 0x5A] {
+                let p: Vec<u8> = (0..n)
+                    .map(|i| fill.wrapping_add((i as u8).wrapping_mul(37)))
+                    .collect();
+                assert_eq!(frames(&mut d, &enc(7, &p)), vec![(7, p.clone())]);
+            }
+        }
+        assert_eq!(d.stats().frames, 4 * (MAX_PAYLOAD as u32 + 1));
     }
 
     #[test]
-    fn corrupted_byte_is_rejected_and_next_frame_accepted() {
-        let mut out = [0u8; 16];
-        let n = encode(0x48, &[1, 2, 3, 4], &mut out).unwrap();
-        let mut wire = out[..n].to_vec();
-        wire[5] ^= 0x10;
-        wire.extend_from_slice(&out[..n]);
+    fn resyncs_at_the_next_delimiter_after_a_lost_byte() {
+        let a = enc(topic::ODOMETRY, &[1; 24]);
+        let b = enc(topic::BATTERY, &[2, 3, 4, 5, 6]);
+        for lost in 0..a.len() - 1 {
+            let mut wire = a.clone();
+            wire.remove(lost);
+            wire.extend_from_slice(&b);
+            let mut d = Decoder::new();
+            // The damaged frame is dropped (never delivered wrong), the next one arrives.
+            assert_eq!(
+                frames(&mut d, &wire),
+                vec![(topic::BATTERY, vec![2, 3, 4, 5, 6])],
+                "lost byte {lost}"
+            );
+            let s = d.stats();
+            assert_eq!(s.frames, 1);
+            assert_eq!(s.bad_check + s.malformed, 1, "lost byte {lost}: {s:?}");
+        }
+        // Garbage before the first frame costs nothing but one dropped piece.
+        let mut wire = vec![0x13, 0xA5, 0x00];
+        wire.extend_from_slice(&b);
         let mut d = Decoder::new();
-        assert_eq!(frames(&mut d, &wire), vec![(0x48, vec![1, 2, 3, 4])]);
+        assert_eq!(frames(&mut d, &wire).len(), 1);
+    }
+
+    #[test]
+    fn catches_a_zero_turned_into_ff() {
+        // Fletcher-16 mod 255 cannot see this: 0x00 and 0xFF are both 0 mod 255.
+        let good = enc(topic::TELEOP, &[0x10, 0x00, 0x20]);
+        let mut d = Decoder::new();
+        let mut bad_wire = Vec::new();
+        // The sender's frame with its zero payload byte received as 0xFF (stuffed
+        // again, as the wire would carry it), the CRC the sender computed.
+        let crc = check(topic::TELEOP, &[0x10, 0x00, 0x20]);
+        let raw = [topic::TELEOP, 0x10, 0xFF, 0x20, crc[0], crc[1]];
+        let mut out = [0u8; 16];
+        let n = cobs_encode(&raw, &mut out).unwrap();
+        bad_wire.extend_from_slice(&out[..n]);
+        bad_wire.push(0);
+        bad_wire.extend_from_slice(&good);
+        assert_eq!(
+            frames(&mut d, &bad_wire),
+            vec![(topic::TELEOP, vec![0x10, 0x00, 0x20])]
+        );
         assert_eq!(d.stats().bad_check, 1);
     }
 
     #[test]
-    fn refuses_oversized_payloads() {
+    fn every_single_bit_flip_is_caught() {
+        let a = enc(topic::PROXIMITY, &[0x20, 0x03, 0, 0, 0xFF, 0x7F, 1, 2]);
+        for i in 0..a.len() - 1 {
+            for bit in 0..8 {
+                let mut wire = a.clone();
+                wire[i] ^= 1 << bit;
+                let mut d = Decoder::new();
+                let got = frames(&mut d, &wire);
+                assert!(got.is_empty(), "byte {i} bit {bit}: {got:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn refuses_oversized_payloads_and_recovers() {
         let mut out = [0u8; 64];
-        assert_eq!(encode(1, &[0; 33], &mut out), None);
-        assert_eq!(encode(1, &[0; 4], &mut out[..9]), None);
+        assert_eq!(encode(1, &[0; MAX_PAYLOAD + 1], &mut out), None);
+        assert_eq!(encode(1, &[0; 4], &mut out[..8]), None);
+        let mut wire = vec![0x55; 200];
+        wire.push(0);
+        wire.extend_from_slice(&enc(1, &[9, 9]));
         let mut d = Decoder::new();
-        assert!(frames(&mut d, &[0xA5, 0x5A, 1, 33, 0, 0]).is_empty());
+        assert_eq!(frames(&mut d, &wire), vec![(1, vec![9, 9])]);
         assert_eq!(d.stats().too_long, 1);
+        // Too short to hold a topic and a CRC; invalid COBS (code past the end).
+        assert!(frames(&mut d, &[0x02, 0x05, 0x00, 0x09, 0x01, 0x00]).is_empty());
+        assert_eq!(d.stats().malformed, 2);
     }
 }

@@ -1,0 +1,220 @@
+//! Every topic of a robot on Zenoh: each message the bus carries is put on
+//! `rtcan/<robot>/<topic>` (a JSON object with robot.toml's field names, or the raw
+//! little-endian payload with `raw`); samples that remote Zenoh nodes put on those keys
+//! are commands, accepted only for the topics the link takes from outside (the gateway's
+//! `teleop`), everything else refused and counted. The bus is any `rtcan_host::Link`.
+#![cfg_attr(
+    test,
+    allow(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::indexing_slicing,
+        clippy::panic
+    )
+)]
+
+use rtcan_host::value::{from_json, to_json};
+use rtcan_host::Link;
+use rtcan_sim::candump::Entry;
+use rtcan_sim::decode::{Catalog, Decoded, Decoder};
+use zenoh::handlers::FifoChannelHandler;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::sample::{Locality, Sample};
+use zenoh::{Session, Wait};
+
+/// Key expression prefix of every robot.
+pub const PREFIX: &str = "rtcan";
+
+/// The key of `topic` of robot `robot`.
+pub fn key(robot: &str, topic: &str) -> String {
+    format!("{PREFIX}/{robot}/{topic}")
+}
+
+/// The robot's name: robot.toml's file stem (robot.toml has no name of its own yet).
+pub fn robot_name(robot_toml: &std::path::Path) -> String {
+    robot_toml
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("robot")
+        .to_string()
+}
+
+/// Bridge options.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// `<robot>` of the key expressions.
+    pub robot: String,
+    /// Zenoh endpoints to listen on (`tcp/127.0.0.1:7447`).
+    pub listen: Vec<String>,
+    /// Zenoh endpoints to connect to.
+    pub connect: Vec<String>,
+    /// Put raw little-endian payloads instead of JSON.
+    pub raw: bool,
+    /// Topics accepted from Zenoh.
+    pub writable: Vec<String>,
+}
+
+/// What a bridge did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Messages put on Zenoh.
+    pub published: u64,
+    /// Commands from Zenoh published on the bus.
+    pub accepted: u64,
+    /// Samples on topics not writable from outside (or not topics at all).
+    pub refused: u64,
+    /// Samples on writable topics whose value did not fit the type, or that the link
+    /// could not send.
+    pub bad: u64,
+}
+
+/// Opens a Zenoh peer session on `listen`/`connect` (no multicast scouting: peers are
+/// named explicitly).
+pub fn open_session(listen: &[String], connect: &[String]) -> Result<Session, String> {
+    let mut c = zenoh::Config::default();
+    let set = |c: &mut zenoh::Config, k: &str, v: String| {
+        c.insert_json5(k, &v)
+            .map_err(|e| format!("zenoh config {k}: {e}"))
+    };
+    set(&mut c, "mode", "\"peer\"".into())?;
+    set(&mut c, "scouting/multicast/enabled", "false".into())?;
+    let list = |v: &[String]| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
+    if !listen.is_empty() {
+        set(&mut c, "listen/endpoints", list(listen))?;
+    }
+    if !connect.is_empty() {
+        set(&mut c, "connect/endpoints", list(connect))?;
+    }
+    zenoh::open(c)
+        .wait()
+        .map_err(|e| format!("opening the Zenoh session: {e}"))
+}
+
+/// A running bridge between one bus and Zenoh.
+pub struct Bridge<'c> {
+    _session: Session,
+    cat: &'c Catalog,
+    pubs: Vec<Publisher<'static>>,
+    commands: Subscriber<FifoChannelHandler<Sample>>,
+    dec: Decoder<'c>,
+    opts: Options,
+    /// Counts so far.
+    pub counts: Counts,
+    /// The last refusal or bad command, for the report.
+    pub last_error: Option<String>,
+}
+
+impl<'c> Bridge<'c> {
+    /// Declares a publisher for every topic of `cat` and the command subscriber.
+    pub fn new(cat: &'c Catalog, opts: Options) -> Result<Self, String> {
+        let session = open_session(&opts.listen, &opts.connect)?;
+        let mut pubs = Vec::new();
+        for t in &cat.topics {
+            pubs.push(
+                session
+                    .declare_publisher(key(&opts.robot, &t.name))
+                    .wait()
+                    .map_err(|e| format!("declaring {}: {e}", t.name))?,
+            );
+        }
+        // Only remote samples are commands: the bridge's own puts are not.
+        let commands = session
+            .declare_subscriber(key(&opts.robot, "*"))
+            .allowed_origin(Locality::Remote)
+            .wait()
+            .map_err(|e| format!("declaring the command subscriber: {e}"))?;
+        Ok(Bridge {
+            _session: session,
+            cat,
+            pubs,
+            commands,
+            dec: Decoder::new(cat),
+            opts,
+            counts: Counts::default(),
+            last_error: None,
+        })
+    }
+
+    fn command(&mut self, s: &Sample, link: &mut dyn Link) {
+        let k = s.key_expr().as_str();
+        let topic = k
+            .strip_prefix(&format!("{PREFIX}/{}/", self.opts.robot))
+            .unwrap_or(k);
+        let Some(t) = self
+            .cat
+            .topics
+            .iter()
+            .find(|t| t.name == topic)
+            .filter(|t| self.opts.writable.contains(&t.name))
+        else {
+            self.counts.refused += 1;
+            self.last_error = Some(format!(
+                "refused a command on `{k}`: writable from outside: {}",
+                self.opts.writable.join(", ")
+            ));
+            return;
+        };
+        let bytes = s.payload().to_bytes();
+        let payload = if self.opts.raw {
+            if bytes.len() == usize::from(t.size) {
+                Ok(bytes.to_vec())
+            } else {
+                Err(format!(
+                    "{} bytes, `{}` has {}",
+                    bytes.len(),
+                    t.name,
+                    t.size
+                ))
+            }
+        } else {
+            serde_json::from_slice::<serde_json::Value>(&bytes)
+                .map_err(|e| format!("not JSON: {e}"))
+                .and_then(|v| from_json(t, &v))
+        };
+        match payload.and_then(|p| link.publish(&t.name, &p)) {
+            Ok(()) => self.counts.accepted += 1,
+            Err(e) => {
+                self.counts.bad += 1;
+                self.last_error = Some(format!("command on `{k}`: {e}"));
+            }
+        }
+    }
+
+    /// Takes the pending commands, then forwards one batch of the bus; `false` when the
+    /// bus ended.
+    pub fn step(&mut self, link: &mut dyn Link) -> Result<bool, String> {
+        while let Ok(Some(s)) = self.commands.try_recv() {
+            self.command(&s, link);
+        }
+        let Some(batch) = link.recv()? else {
+            return Ok(false);
+        };
+        for f in batch {
+            let e = Entry {
+                time_ns: f.time_ns,
+                iface: String::new(),
+                frame: f.frame,
+                standard: false,
+            };
+            if let Some(Decoded::Message { topic, payload, .. }) = self.dec.push(&e) {
+                self.put(topic, &payload)?;
+            }
+        }
+        Ok(true)
+    }
+
+    /// Puts one message of topic index `topic` on Zenoh.
+    pub fn put(&mut self, topic: usize, payload: &[u8]) -> Result<(), String> {
+        let (Some(t), Some(p)) = (self.cat.topics.get(topic), self.pubs.get(topic)) else {
+            return Ok(());
+        };
+        let r = if self.opts.raw {
+            p.put(payload.to_vec()).wait()
+        } else {
+            p.put(to_json(t, payload).to_string()).wait()
+        };
+        r.map_err(|e| format!("zenoh put {}: {e}", t.name))?;
+        self.counts.published += 1;
+        Ok(())
+    }
+}

@@ -1,0 +1,102 @@
+//! The gateway's side of the serial link, HAL-free, on the simulated robot: what the
+//! Triskar2 gateway firmware does with `triskar2_link` (examples/triskar2/src/io.rs),
+//! run against `rtcan_sim::live` so the host side can be tested end to end over a real
+//! pty. Robot → host: every odometry, proximity, battery and log message the bus carries;
+//! host → robot: `teleop` commands, published by the gateway on the bus.
+use std::io::{Read, Write};
+
+use rtcan_sim::candump::Entry;
+use rtcan_sim::decode::{Catalog, Decoded, Decoder as BusDecoder};
+use triskar2_link::{topic, Decoder, LinkStats, MAX_PAYLOAD, OVERHEAD};
+
+use crate::link::Link;
+use crate::sim::SimLink;
+
+/// The simulated robot with its gateway's serial link on `port`.
+pub struct SimGateway<'c, P: Read + Write> {
+    robot: SimLink,
+    port: P,
+    link_rx: Decoder,
+    bus: BusDecoder<'c>,
+    cat: &'c Catalog,
+    /// Frames written to the host.
+    pub sent: u64,
+}
+
+impl<'c, P: Read + Write> SimGateway<'c, P> {
+    /// The gateway of `robot` (its catalog `cat`) on `port` (non-blocking or with a
+    /// read timeout: `step` reads what is there).
+    pub fn new(robot: SimLink, port: P, cat: &'c Catalog) -> Self {
+        SimGateway {
+            robot,
+            port,
+            link_rx: Decoder::new(),
+            bus: BusDecoder::new(cat),
+            cat,
+            sent: 0,
+        }
+    }
+
+    /// Link counters of the host → robot direction.
+    pub fn stats(&self) -> LinkStats {
+        self.link_rx.stats()
+    }
+
+    /// Robot pose (x, y m).
+    pub fn pose_m(&self) -> (f64, f64) {
+        self.robot.pose_m()
+    }
+
+    /// Runs the robot one step, forwards its messages to the host, and takes the host's
+    /// commands; `mangle` may alter the bytes written (to test loss on the line).
+    pub fn step(&mut self, mangle: &mut dyn FnMut(&mut Vec<u8>)) -> Result<(), String> {
+        let mut buf = [0u8; 512];
+        let n = match self.port.read(&mut buf) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => 0,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => 0,
+            Err(e) => return Err(format!("gateway link: {e}")),
+        };
+        let mut cmds = Vec::new();
+        for &b in buf.get(..n).unwrap_or(&[]) {
+            if let Some((topic::TELEOP, p)) = self.link_rx.push(b) {
+                cmds.push(p.to_vec());
+            }
+        }
+        for c in cmds {
+            // A command of the wrong size is dropped, as the firmware does.
+            let _ = self.robot.publish("teleop", &c);
+        }
+        let mut out = Vec::new();
+        for s in self.robot.recv()?.unwrap_or_default() {
+            let e = Entry {
+                time_ns: s.time_ns,
+                iface: String::new(),
+                frame: s.frame,
+                standard: false,
+            };
+            let Some(Decoded::Message {
+                topic: t, payload, ..
+            }) = self.bus.push(&e)
+            else {
+                continue;
+            };
+            let name = self.cat.topics.get(t).map_or("", |t| t.name.as_str());
+            let Some(&(lt, _)) = topic::NAMES
+                .iter()
+                .find(|(n, nm)| *nm == name && *n != topic::TELEOP)
+            else {
+                continue;
+            };
+            let mut frame = [0u8; MAX_PAYLOAD + OVERHEAD];
+            if let Some(k) = triskar2_link::encode(lt, &payload, &mut frame) {
+                out.extend_from_slice(frame.get(..k).unwrap_or(&[]));
+                self.sent += 1;
+            }
+        }
+        mangle(&mut out);
+        self.port
+            .write_all(&out)
+            .map_err(|e| format!("gateway link: {e}"))
+    }
+}

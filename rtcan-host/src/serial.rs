@@ -1,0 +1,162 @@
+//! The gateway's serial link as a [`Link`] (`--serial PORT`): frames of `triskar2_link`
+//! (COBS + CRC-16) both ways. The link carries whole topic messages, not CAN frames;
+//! each received message is handed out as the frames the bus carried it in (same message
+//! ID and fragmentation, `rtcan_core::fragment`), stamped with wall time since the link
+//! opened, so every command decodes it the same way. The host sends `teleop`.
+use std::fs::File;
+use std::io::{Read, Write};
+use std::os::fd::AsRawFd;
+use std::time::Instant;
+
+use rtcan_core::fragment::{fragment_count, fragment_data, fragment_field};
+use rtcan_core::{CanId, Frame, MsgId, Nanos};
+use rtcan_sim::decode::Catalog;
+use triskar2_link::{topic, Decoder, LinkStats, MAX_PAYLOAD, OVERHEAD};
+
+use crate::link::{Link, Stamped};
+
+/// Link topics the host may send (the gateway forwards them onto the bus).
+pub const HOST_TOPICS: [u8; 1] = [topic::TELEOP];
+
+/// Puts the terminal `fd` in raw mode with reads that return after 100 ms of silence.
+pub fn make_raw(fd: i32) -> Result<(), String> {
+    // SAFETY: `t` is a plain C struct filled by tcgetattr before use; fd is open.
+    unsafe {
+        let mut t: libc::termios = std::mem::zeroed();
+        if libc::tcgetattr(fd, &mut t) != 0 {
+            return Err(format!(
+                "not a terminal: {}",
+                std::io::Error::last_os_error()
+            ));
+        }
+        libc::cfmakeraw(&mut t);
+        t.c_cc[libc::VMIN] = 0;
+        t.c_cc[libc::VTIME] = 1;
+        // 115200 Bd as the gateway's USART (ignored by a pty).
+        libc::cfsetspeed(&mut t, libc::B115200);
+        if libc::tcsetattr(fd, libc::TCSANOW, &t) != 0 {
+            return Err(format!("tcsetattr: {}", std::io::Error::last_os_error()));
+        }
+    }
+    Ok(())
+}
+
+/// A serial link to the gateway.
+pub struct SerialLink<P: Read + Write> {
+    port: P,
+    dec: Decoder,
+    /// Link topic → (message ID, payload size) on the bus.
+    topics: Vec<(u8, MsgId, usize)>,
+    tid: u8,
+    started: Instant,
+    now_ns: Nanos,
+}
+
+impl SerialLink<File> {
+    /// Opens the serial port (or pty) at `path` in raw mode.
+    pub fn open(path: &str, cat: &Catalog) -> Result<Self, String> {
+        let port = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(|e| format!("--serial {path}: {e}"))?;
+        make_raw(port.as_raw_fd()).map_err(|e| format!("--serial {path}: {e}"))?;
+        Ok(Self::new(port, cat))
+    }
+}
+
+impl<P: Read + Write> SerialLink<P> {
+    /// A link over `port` (already configured) for the robot `cat` describes.
+    pub fn new(port: P, cat: &Catalog) -> Self {
+        let topics = topic::NAMES
+            .iter()
+            .filter_map(|(n, name)| {
+                let t = cat.topics.iter().find(|t| t.name == *name)?;
+                Some((*n, MsgId(t.msg_id), usize::from(t.size)))
+            })
+            .collect();
+        SerialLink {
+            port,
+            dec: Decoder::new(),
+            topics,
+            tid: 0,
+            started: Instant::now(),
+            now_ns: 0,
+        }
+    }
+
+    /// Link counters (frames, CRC failures, malformed, too long).
+    pub fn stats(&self) -> LinkStats {
+        self.dec.stats()
+    }
+
+    /// The bus frames of one message.
+    fn frames(&mut self, msg: MsgId, payload: &[u8], out: &mut Vec<Stamped>) {
+        let count = fragment_count(payload.len());
+        self.tid = self.tid.wrapping_add(1);
+        for counter in (0..count).rev() {
+            let mut data = [0u8; 8];
+            let dlc = fragment_data(payload, counter, &mut data);
+            let field = fragment_field(count, self.tid, counter);
+            let frame = CanId::new(0, msg, field)
+                .and_then(|id| Frame::new(id, data.get(..usize::from(dlc)).unwrap_or(&[])));
+            if let Some(frame) = frame {
+                out.push(Stamped {
+                    time_ns: self.now_ns,
+                    frame,
+                });
+            }
+        }
+    }
+}
+
+impl<P: Read + Write> Link for SerialLink<P> {
+    fn recv(&mut self) -> Result<Option<Vec<Stamped>>, String> {
+        let mut buf = [0u8; 1024];
+        let n = match self.port.read(&mut buf) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => 0,
+            // A pty whose other side closed reads EIO: the link is gone.
+            Err(e) => return Err(format!("serial link: {e}")),
+        };
+        self.now_ns = self.started.elapsed().as_nanos() as Nanos;
+        let mut out = Vec::new();
+        let mut msgs = Vec::new();
+        for &b in buf.get(..n).unwrap_or(&[]) {
+            if let Some((t, p)) = self.dec.push(b) {
+                msgs.push((t, p.to_vec()));
+            }
+        }
+        for (t, p) in msgs {
+            // Unknown link topics and wrong sizes are dropped (counted by the caller's
+            // decoder as nothing: they never reach the bus view).
+            if let Some(&(_, msg, size)) = self.topics.iter().find(|(n, _, _)| *n == t) {
+                if p.len() == size {
+                    self.frames(msg, &p, &mut out);
+                }
+            }
+        }
+        Ok(Some(out))
+    }
+
+    fn publish(&mut self, name: &str, payload: &[u8]) -> Result<(), String> {
+        let t = topic::NAMES
+            .iter()
+            .find(|(n, nm)| *nm == name && HOST_TOPICS.contains(n))
+            .map(|(n, _)| *n)
+            .ok_or_else(|| {
+                format!("the gateway link takes only teleop from the host, not `{name}`")
+            })?;
+        let mut frame = [0u8; MAX_PAYLOAD + OVERHEAD];
+        let n = triskar2_link::encode(t, payload, &mut frame)
+            .ok_or_else(|| format!("`{name}`: {} bytes do not fit a link frame", payload.len()))?;
+        self.port
+            .write_all(frame.get(..n).unwrap_or(&[]))
+            .and_then(|()| self.port.flush())
+            .map_err(|e| format!("serial link: {e}"))
+    }
+
+    fn now_ns(&self) -> Nanos {
+        self.started.elapsed().as_nanos() as Nanos
+    }
+}

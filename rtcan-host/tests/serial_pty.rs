@@ -1,0 +1,174 @@
+//! The gateway serial link end to end over a real pty pair: the simulated robot with the
+//! gateway's link code (`triskar2_link`, as the firmware uses it) on the master side,
+//! `rtcan_host::serial::SerialLink` (what `--serial PORT` opens) on the slave side. The
+//! line loses bytes in both directions; both ends resynchronise, the host drives the
+//! robot and reads its odometry.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+
+use std::fs::File;
+use std::io::Write;
+use std::os::fd::FromRawFd;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use rtcan_host::gateway::SimGateway;
+use rtcan_host::serial::SerialLink;
+use rtcan_host::sim::SimLink;
+use rtcan_host::value::{from_json, to_json};
+use rtcan_host::Link;
+use rtcan_sim::candump::Entry;
+use rtcan_sim::decode::{plan_catalog, Decoded, Decoder};
+use serde_json::json;
+
+fn plan() -> rtcan_model::Plan {
+    rtcan_model::Robot::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml"))
+        .map_err(|d| d.render())
+        .unwrap()
+}
+
+/// A pty pair: the master (non-blocking), the slave (kept open so the master never
+/// reads EIO while the host reopens it) and the slave's path.
+fn pty() -> (File, File, String) {
+    let (mut m, mut s) = (0, 0);
+    let mut name = [0 as libc::c_char; 128];
+    // SAFETY: out-pointers to locals; the name buffer is large enough for /dev/pts/N.
+    let rc = unsafe {
+        libc::openpty(
+            &mut m,
+            &mut s,
+            name.as_mut_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(rc, 0, "openpty: {}", std::io::Error::last_os_error());
+    // SAFETY: m is an open fd this test owns.
+    unsafe {
+        let fl = libc::fcntl(m, libc::F_GETFL);
+        libc::fcntl(m, libc::F_SETFL, fl | libc::O_NONBLOCK);
+    }
+    // SAFETY: openpty NUL-terminates the name.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_str()
+        .unwrap()
+        .to_string();
+    // A serial port is configured before anyone talks on it: raw, no echo (a pty
+    // starts cooked and would echo the gateway's frames back to it).
+    rtcan_host::serial::make_raw(s).unwrap();
+    // SAFETY: both fds are open and owned from here on by the Files.
+    unsafe { (File::from_raw_fd(m), File::from_raw_fd(s), path) }
+}
+
+#[test]
+fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
+    let (master, _slave, path) = pty();
+    let stop = Arc::new(AtomicBool::new(false));
+    let stop2 = stop.clone();
+    let gateway = std::thread::spawn(move || {
+        let plan = plan();
+        let cat = plan_catalog(&plan);
+        // Five times real time, so the test is short; the link keeps up.
+        let robot = SimLink::start(&plan, 5.0).unwrap();
+        let mut gw = SimGateway::new(robot, master, &cat);
+        let mut dropped = 0u32;
+        let mut delimiters = 0u64;
+        // Every 40th frame of the robot loses its 7th-last byte on the line.
+        let mut lose = |out: &mut Vec<u8>| {
+            let mut i = 0;
+            while i < out.len() {
+                if out[i] == 0 {
+                    delimiters += 1;
+                    if delimiters.is_multiple_of(40) && i >= 7 {
+                        out.remove(i - 7);
+                        dropped += 1;
+                        i -= 1;
+                    }
+                }
+                i += 1;
+            }
+        };
+        while !stop2.load(Ordering::Relaxed) {
+            gw.step(&mut lose).unwrap();
+        }
+        (gw.stats(), gw.sent, dropped, gw.pose_m())
+    });
+
+    let plan = plan();
+    let cat = plan_catalog(&plan);
+    let mut host = SerialLink::open(&path, &cat).unwrap();
+    // Garbage on the line before the first command (a half frame, a bad frame): the
+    // gateway drops it and resynchronises on the delimiters.
+    {
+        let mut raw = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        raw.write_all(&[0x13, 0x37, 0xA5, 0x00, 0x05, 0xFF, 0xFF, 0x00])
+            .unwrap();
+    }
+    let teleop = cat.topics.iter().find(|t| t.name == "teleop").unwrap();
+    let cmd = from_json(teleop, &json!({"vx": 0.25, "vy": 0, "wz": 0})).unwrap();
+    host.publish("teleop", &cmd).unwrap();
+    assert!(host
+        .publish("odometry", &[0; 24])
+        .unwrap_err()
+        .contains("only teleop"));
+
+    let mut dec = Decoder::new(&cat);
+    let (mut odometry, mut proximity, mut last_x) = (0, 0, 0.0);
+    let t0 = Instant::now();
+    // Until the robot has driven 0.3 m by its own odometry (the time limit only guards
+    // against a hang; it is not what the test measures).
+    while last_x < 0.3 && t0.elapsed() < Duration::from_secs(60) {
+        for s in host.recv().unwrap().unwrap() {
+            let e = Entry {
+                time_ns: s.time_ns,
+                iface: "serial".into(),
+                frame: s.frame,
+                standard: false,
+            };
+            if let Some(Decoded::Message { topic, payload, .. }) = dec.push(&e) {
+                let t = &cat.topics[topic];
+                match t.name.as_str() {
+                    "odometry" => {
+                        odometry += 1;
+                        last_x = to_json(t, &payload)["x"].as_f64().unwrap();
+                    }
+                    "proximity" => proximity += 1,
+                    _ => {}
+                }
+            }
+        }
+    }
+    stop.store(true, Ordering::Relaxed);
+    let (gw_stats, sent, dropped, pose) = gateway.join().unwrap();
+    let host_stats = host.stats();
+    eprintln!("gateway {gw_stats:?} sent {sent} damaged {dropped}; host {host_stats:?}; odometry {odometry} x {last_x}");
+    assert!(
+        last_x >= 0.3,
+        "odometry x {last_x} after {odometry} messages"
+    );
+    assert!(pose.0 >= 0.3, "robot at {pose:?}");
+    assert!(
+        odometry > 50 && proximity > 25,
+        "{odometry} odometry, {proximity} proximity"
+    );
+    // Host → robot: the two garbage pieces were dropped, the command arrived.
+    assert_eq!(gw_stats.frames, 1, "{gw_stats:?}");
+    assert_eq!(gw_stats.malformed + gw_stats.bad_check, 2, "{gw_stats:?}");
+    // Robot → host: every damaged frame was dropped, never delivered wrong, and the
+    // frames after it arrived.
+    assert!(dropped > 0);
+    assert!(
+        host_stats.bad_check + host_stats.malformed <= dropped,
+        "{host_stats:?}, {dropped} damaged"
+    );
+    assert!(
+        host_stats.bad_check + host_stats.malformed > 0,
+        "{host_stats:?}"
+    );
+    assert!(u64::from(host_stats.frames) + u64::from(dropped) <= sent);
+}
