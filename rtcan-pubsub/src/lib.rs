@@ -23,6 +23,7 @@ mod publisher;
 mod ring;
 pub mod status;
 mod subscriber;
+pub mod supervision;
 pub mod topic;
 
 pub use handle::{Loan, Msg};
@@ -32,4 +33,5 @@ pub use port::{ModuleHost, RxPort, TxPort};
 pub use publisher::{AllocWait, PoolExhausted, PublishWait, Publisher, SendError, WouldBlock};
 pub use status::{SafeReason, SafetyConfig, SystemStatus};
 pub use subscriber::{Recv, Subscriber};
+pub use supervision::{EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing};
 pub use topic::{pool_blocks, RecvError, Remote, Topic, TopicStats};
