@@ -7,6 +7,7 @@
 //! MISSING_SLACK_CYCLES` cycles old: heartbeats come every `HEARTBEAT_PERIOD_CYCLES`
 //! cycles, so a dead module shows at most `MISSING_SLACK_CYCLES + 1` cycles after the
 //! heartbeat it failed to send was due.
+use rtcan_core::confinement::ErrorState;
 use rtcan_core::counters::Counters;
 use rtcan_core::heartbeat::HEARTBEAT_PERIOD_CYCLES;
 
@@ -62,7 +63,8 @@ pub struct ModuleRow {
 /// The engine's own counters that go into the table's own row (the reporting module's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct EngineHealth {
-    /// Transmit / receive error counters (`Engine::error_state`).
+    /// Transmit / receive error counters (`Engine::error_state`), saturated at 255
+    /// (bus-off shows in `bus_off`).
     pub tec: u8,
     pub rec: u8,
     /// Counters of `rtcan_core::counters::Counters`.
@@ -73,11 +75,11 @@ pub struct EngineHealth {
 }
 
 impl EngineHealth {
-    /// From the engine's counters and its error counters (TEC, REC).
-    pub fn new(c: &Counters, tec: u8, rec: u8) -> Self {
+    /// From the engine's counters and `Engine::error_state`.
+    pub fn new(c: &Counters, e: &ErrorState) -> Self {
         EngineHealth {
-            tec,
-            rec,
+            tec: u8::try_from(e.tec).unwrap_or(u8::MAX),
+            rec: u8::try_from(e.rec).unwrap_or(u8::MAX),
             bus_off: c.bus_off,
             rx_overrun: c.rx_overrun,
             deadline_missed: c.deadline_missed,
