@@ -15,9 +15,12 @@
 )]
 
 pub mod bench;
+pub mod flash;
 mod handle;
 pub mod message;
 pub mod node;
+pub mod param;
+pub mod param_store;
 pub mod port;
 mod publisher;
 mod ring;
