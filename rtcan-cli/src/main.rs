@@ -2,6 +2,7 @@
 mod check;
 mod decode;
 mod out;
+mod param;
 mod sim;
 
 const USAGE: &str = "\
@@ -17,6 +18,9 @@ commands:
                                 `rtcan sim --help`)
   decode <log|-> (--robot robot.toml | --scenario rtcan-paper) [--force]
                                 candump log -> topic-level messages (`rtcan decode --help`)
+  param (list | get <node.name> | set <node.name> <value>) [--sim robot.toml] [--json]
+                                module parameters, range-checked by the module
+                                (docs/SERVICES.md); exit 1 when refused
   help                          this text
 ";
 
@@ -38,6 +42,7 @@ fn run(args: &[String]) -> i32 {
         "check" => check::run(rest),
         "sim" => sim::run(rest),
         "decode" => decode::run(rest),
+        "param" => param::run(rest),
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0

@@ -225,49 +225,72 @@ impl<const N: usize> Params<N> {
         n
     }
 
-    /// Serves one request (`Request::decode`d or not): the reply to send back. A set of
-    /// a persisted parameter is written through `persist` after it was applied.
+    /// Serves one request: the reply to send back (see [`serve`]).
     pub fn serve(&mut self, request: &[u8], persist: &mut dyn FnMut(u16, u32) -> bool) -> Reply {
-        let Some(req) = Request::decode(request) else {
-            self.refused = self.refused.saturating_add(1);
-            return Reply::Refused {
-                index: 0,
-                why: Refused::BadRequest,
-            };
+        serve(
+            self.specs,
+            &mut self.values,
+            &mut self.refused,
+            request,
+            persist,
+        )
+    }
+}
+
+/// The module side of the protocol over any parameter set (`values` in `specs` order):
+/// decodes `request`, range-checks a set (a refused value changes nothing; `refused`
+/// counts it), writes a set of a persisted parameter through `persist` after applying
+/// it, and returns the reply.
+pub fn serve(
+    specs: &[ParamSpec],
+    values: &mut [u32],
+    refused: &mut u32,
+    request: &[u8],
+    persist: &mut dyn FnMut(u16, u32) -> bool,
+) -> Reply {
+    let Some(req) = Request::decode(request) else {
+        *refused = refused.saturating_add(1);
+        return Reply::Refused {
+            index: 0,
+            why: Refused::BadRequest,
         };
-        let index = req.index();
-        let i = usize::from(index);
-        let count = u16::try_from(N).unwrap_or(u16::MAX);
-        match req {
-            Request::Get { .. } | Request::List { .. } => match self.get(i) {
-                Some(v) => Reply::Value {
+    };
+    let index = req.index();
+    let i = usize::from(index);
+    let count = u16::try_from(specs.len()).unwrap_or(u16::MAX);
+    let (Some(spec), Some(slot)) = (specs.get(i), values.get_mut(i)) else {
+        *refused = refused.saturating_add(1);
+        return Reply::Refused {
+            index,
+            why: Refused::Unknown,
+        };
+    };
+    match req {
+        Request::Get { .. } | Request::List { .. } => Reply::Value {
+            index,
+            bits: *slot,
+            count,
+        },
+        Request::Set { bits, .. } => match spec.check(bits) {
+            Ok(v) => {
+                *slot = v.bits();
+                if spec.persist && !persist(index, v.bits()) {
+                    return Reply::Refused {
+                        index,
+                        why: Refused::NotPersisted,
+                    };
+                }
+                Reply::Value {
                     index,
                     bits: v.bits(),
                     count,
-                },
-                None => Reply::Refused {
-                    index,
-                    why: Refused::Unknown,
-                },
-            },
-            Request::Set { bits, .. } => match self.set(i, bits) {
-                Ok(v) => {
-                    let keep = self.specs.get(i).is_some_and(|s| s.persist);
-                    if keep && !persist(index, v.bits()) {
-                        return Reply::Refused {
-                            index,
-                            why: Refused::NotPersisted,
-                        };
-                    }
-                    Reply::Value {
-                        index,
-                        bits: v.bits(),
-                        count,
-                    }
                 }
-                Err(why) => Reply::Refused { index, why },
-            },
-        }
+            }
+            Err(why) => {
+                *refused = refused.saturating_add(1);
+                Reply::Refused { index, why }
+            }
+        },
     }
 }
 
