@@ -23,3 +23,8 @@ bash scripts/update-costs.sh --check
 
 echo "== Triskar2 firmware images and size budgets"
 bash examples/triskar2/size-check.sh
+
+echo "== issue 15: bootloader image (thumbv7m) within its 8 KiB budget; rtcan param on the simulated robot"
+(cd rtcan-boot/bootloader && cargo build --release -q && \
+    bash ../../boards/size-check.sh budget.toml target/thumbv7m-none-eabi/release)
+cargo run -q -p rtcan-cli -- param set motor1.kp 0.8 --sim robot.toml
