@@ -492,6 +492,7 @@ mod tests {
         let ops0 = probe.ops;
         update(&mut probe, Some(0), &new, 0xAA).unwrap();
         let total = probe.ops - ops0;
+        eprintln!("flash operations: {total}");
         assert!(total > 2500, "{total}");
         for cut in 0..total {
             let mut f = base.clone();

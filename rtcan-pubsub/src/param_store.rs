@@ -349,6 +349,7 @@ mod tests {
             s.write(i, v).unwrap();
         }
         let total = s.flash().ops;
+        eprintln!("flash operations: {total}");
         assert!(total > 1200, "covers compactions: {total}");
         for cut in 0..total {
             let mut f = F103Flash::<3>::new();
