@@ -24,6 +24,7 @@ pub mod param_store;
 pub mod port;
 mod publisher;
 mod ring;
+pub mod service;
 pub mod status;
 mod subscriber;
 pub mod supervision;
