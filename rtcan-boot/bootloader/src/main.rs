@@ -29,7 +29,7 @@ impl Flash for Rom {
         60
     }
     fn read(&self, addr: u32) -> Result<u16, FlashError> {
-        if addr % 2 != 0 || addr >= self.pages() * self.page_bytes() {
+        if !addr.is_multiple_of(2) || addr >= self.pages() * self.page_bytes() {
             return Err(FlashError::OutOfRange);
         }
         // SAFETY: an aligned address inside the on-chip flash region (checked above).
