@@ -26,3 +26,7 @@ bash examples/triskar2/size-check.sh
 
 echo "== the Triskar2 images on emulated STM32F103 (rtcan-emu, docs/EMULATOR.md)"
 cargo test --release -p rtcan-emu
+echo "== issue 15: bootloader image (thumbv7m) within its 8 KiB budget; rtcan param on the simulated robot"
+(cd rtcan-boot/bootloader && cargo build --release -q && \
+    bash ../../boards/size-check.sh budget.toml target/thumbv7m-none-eabi/release)
+cargo run -q -p rtcan-cli -- param set motor1.kp 0.8 --sim robot.toml

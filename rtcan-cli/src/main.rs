@@ -7,6 +7,7 @@ mod emulate;
 mod link_args;
 mod monitor;
 mod out;
+mod param;
 mod pub_;
 mod record;
 mod sim;
@@ -32,6 +33,9 @@ commands:
                                 --replay LOG, --serial PORT or --can IFACE
   bridge [--listen E] [--connect E]   every topic on Zenoh, rtcan/<robot>/<topic>
                                 (`rtcan bridge --help`, docs/BRIDGE.md)
+  param (list | get <node.name> | set <node.name> <value>) [--sim robot.toml] [--json]
+                                module parameters, range-checked by the module
+                                (docs/SERVICES.md); exit 1 when refused
   help                          this text
 ";
 
@@ -62,6 +66,7 @@ fn run(args: &[String]) -> i32 {
             println!("rtcan {}", env!("CARGO_PKG_VERSION"));
             0
         }
+        "param" => param::run(rest),
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0

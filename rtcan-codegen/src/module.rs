@@ -304,6 +304,13 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
         .iter()
         .position(|&b| b == mi)
         .map_or(0u8, |p| u8::try_from(p + 1).unwrap_or(u8::MAX));
+    // Backup masters in rank order: the safe-state rule follows the current sync master.
+    let backups: Vec<u8> = plan
+        .bus
+        .backup_masters
+        .iter()
+        .map(|&b| u8::try_from(b).unwrap_or(u8::MAX))
+        .collect();
     let doc = format!(
         "Module `{}` (index {}, board {}{}).",
         m.name,
@@ -390,12 +397,12 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             pub static RX_PORTS: [&dyn ::rtcan::pubsub::RxPort; #nrx] = [#(&topics::#rx_ports),*];
             /// System status as seen from this module (sync, master heartbeat, fingerprints).
             pub static STATUS: ::rtcan::pubsub::SystemStatus =
-                ::rtcan::pubsub::SystemStatus::new(::rtcan::pubsub::SafetyConfig {
+                ::rtcan::pubsub::SystemStatus::with_backups(::rtcan::pubsub::SafetyConfig {
                     module: INDEX,
                     master: super::MASTER,
                     // Three missed master heartbeats.
                     max_missed_cycles: (3 * ::rtcan::core::engine::HEARTBEAT_CYCLES) as u16,
-                });
+                }, &[#(#backups),*]);
             /// The nodes whose worst state goes into this module's heartbeat.
             pub static NODES: [&::rtcan::pubsub::Node; #nnodes] = [#(&nodes::#node_refs::NODE),*];
             /// Every static of this module back to power-on: topics (blocks held by live

@@ -21,6 +21,7 @@ pub mod fingerprint;
 pub mod ids;
 pub mod model;
 pub mod names;
+pub mod params;
 pub mod plan;
 pub mod report;
 pub mod schedule;
@@ -122,6 +123,9 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
         }
         Ok(root) => {
             model = validate::validate(&root, &mut items);
+            if let (Some(m), syntax::Kind::Table(entries)) = (&model, &root.kind) {
+                params::validate(entries, m, &mut items);
+            }
             if let Some(m) = &model {
                 plan = plan::build(m, file, &mut items);
                 if let Some(p) = &plan {

@@ -14,7 +14,9 @@ use rtcan_core::laxity::LaxityEncoding;
 use rtcan_core::timing::{bits_to_ns, worst_case_bits};
 use rtcan_core::Class;
 
-const TOP_KEYS: &[&str] = &["bus", "types", "modules", "nodes", "topics", "sim"];
+const TOP_KEYS: &[&str] = &[
+    "bus", "types", "modules", "nodes", "topics", "sim", "params",
+];
 const BUS_KEYS: &[&str] = &[
     "bitrate",
     "cycle",

@@ -15,14 +15,19 @@
 )]
 
 pub mod bench;
+pub mod flash;
 mod handle;
 pub mod message;
 pub mod node;
+pub mod param;
+pub mod param_store;
 pub mod port;
 mod publisher;
 mod ring;
+pub mod service;
 pub mod status;
 mod subscriber;
+pub mod supervision;
 pub mod topic;
 
 pub use handle::{Loan, Msg};
@@ -32,4 +37,5 @@ pub use port::{ModuleHost, RxPort, TxPort};
 pub use publisher::{AllocWait, PoolExhausted, PublishWait, Publisher, SendError, WouldBlock};
 pub use status::{SafeReason, SafetyConfig, SystemStatus};
 pub use subscriber::{Recv, Subscriber};
+pub use supervision::{EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing};
 pub use topic::{pool_blocks, RecvError, Remote, Topic, TopicStats};

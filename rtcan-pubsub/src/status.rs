@@ -41,12 +41,37 @@ struct StatusState {
     mismatch: Option<(u8, u32)>,
     heard: u64,
     states: [u8; 64],
+    /// Cycles since each module's last heartbeat (saturating; meaningful where `heard`).
+    ages: [u16; 64],
     sync_losses: u32,
+}
+
+const POWER_ON: StatusState = StatusState {
+    synced: false,
+    master_heard: false,
+    master_age: 0,
+    master_state: 0,
+    mismatch: None,
+    heard: 0,
+    states: [0; 64],
+    ages: [0; 64],
+    sync_losses: 0,
+};
+
+/// One cycle passed: every heartbeat (the master's included) is a cycle older.
+fn age(st: &mut StatusState) {
+    st.master_age = st.master_age.saturating_add(1);
+    for a in st.ages.iter_mut() {
+        *a = a.saturating_add(1);
+    }
 }
 
 /// The system-status view of one module. `static STATUS: SystemStatus = SystemStatus::new(cfg);`
 pub struct SystemStatus {
     config: SafetyConfig,
+    /// Backup masters in rank order: after the configured master, the sync master is
+    /// the first of these still heard (the arbiter's takeover order, rtcan-core arbiter).
+    backups: &'static [u8],
     state: Mutex<RefCell<StatusState>>,
 }
 
@@ -54,19 +79,65 @@ impl SystemStatus {
     /// Nothing heard yet: the safe state is required until sync and the master's
     /// heartbeat arrive (on the master itself, until nothing; it is its own sync).
     pub const fn new(config: SafetyConfig) -> Self {
+        Self::with_backups(config, &[])
+    }
+
+    /// As `new`, with the robot's backup masters in rank order (`[bus] backup_masters`).
+    /// The safe-state rule then follows the current sync master: when the configured
+    /// master is silent and a backup took over, that backup's heartbeat and state count.
+    pub const fn with_backups(config: SafetyConfig, backups: &'static [u8]) -> Self {
         SystemStatus {
             config,
-            state: Mutex::new(RefCell::new(StatusState {
-                synced: false,
-                master_heard: false,
-                master_age: 0,
-                master_state: 0,
-                mismatch: None,
-                heard: 0,
-                states: [0; 64],
-                sync_losses: 0,
-            })),
+            backups,
+            state: Mutex::new(RefCell::new(POWER_ON)),
         }
+    }
+
+    /// The module whose heartbeat the safe-state rule watches now: the configured master
+    /// while it is heard, else the best-ranked backup heard within `max_missed_cycles`
+    /// (the one that took over the sync), else the configured master.
+    fn current_master(&self, st: &StatusState) -> u8 {
+        let cfg = self.config;
+        // This module itself (a backup) counts while synced: it took over the sync
+        // when every better-ranked master went silent (the engine reports `Synced`).
+        let fresh = |m: u8| {
+            (m == cfg.module && st.synced)
+                || m < 64
+                    && st.heard & (1u64 << m) != 0
+                    && st
+                        .ages
+                        .get(usize::from(m))
+                        .is_some_and(|&a| a <= cfg.max_missed_cycles)
+        };
+        if fresh(cfg.master) {
+            return cfg.master;
+        }
+        self.backups
+            .iter()
+            .copied()
+            .find(|&b| fresh(b))
+            .unwrap_or(cfg.master)
+    }
+
+    /// The module currently followed as sync master (see `with_backups`).
+    pub fn sync_master(&self) -> u8 {
+        self.with(|st| self.current_master(st))
+    }
+
+    /// Cycles since `module`'s last heartbeat, `None` if never heard since power-on.
+    pub fn module_age(&self, module: u8) -> Option<u16> {
+        self.with(|st| {
+            if module < 64 && st.heard & (1u64 << module) != 0 {
+                st.ages.get(usize::from(module)).copied()
+            } else {
+                None
+            }
+        })
+    }
+
+    /// Modules heard at least once since power-on (bit m = module m).
+    pub fn heard_mask(&self) -> u64 {
+        self.with(|st| st.heard)
     }
 
     fn with<R>(&self, f: impl FnOnce(&mut StatusState) -> R) -> R {
@@ -79,7 +150,7 @@ impl SystemStatus {
         self.with(|st| match event {
             Event::Synced => st.synced = true,
             // Ages the master's heartbeat (same as `on_cycle`).
-            Event::CycleStart => st.master_age = st.master_age.saturating_add(1),
+            Event::CycleStart => age(st),
             Event::SyncLost => {
                 st.synced = false;
                 st.sync_losses = st.sync_losses.saturating_add(1);
@@ -97,6 +168,9 @@ impl SystemStatus {
                     *s = state;
                     st.heard |= 1u64 << (module & 63);
                 }
+                if let Some(a) = st.ages.get_mut(usize::from(module)) {
+                    *a = 0;
+                }
                 if module == master {
                     st.master_heard = true;
                     st.master_age = 0;
@@ -109,7 +183,7 @@ impl SystemStatus {
     /// Ages the master's heartbeat by one cycle. The engine's `Event::CycleStart` does
     /// this through `event`; call it directly only when driving the status by hand.
     pub fn on_cycle(&self) {
-        self.with(|st| st.master_age = st.master_age.saturating_add(1));
+        self.with(age);
     }
 
     /// Why the safe state is required now, if it is.
@@ -125,13 +199,27 @@ impl SystemStatus {
             if cfg.module == cfg.master {
                 return None;
             }
+            let master = self.current_master(st);
+            if cfg.module == master {
+                return None;
+            }
             if !st.synced {
                 return Some(SafeReason::NoSync);
             }
-            if !st.master_heard || st.master_age > cfg.max_missed_cycles {
+            let (heard, age, state) = if master == cfg.master {
+                (st.master_heard, st.master_age, st.master_state)
+            } else {
+                let i = usize::from(master);
+                (
+                    true,
+                    st.ages.get(i).copied().unwrap_or(u16::MAX),
+                    st.states.get(i).copied().unwrap_or(0),
+                )
+            };
+            if !heard || age > cfg.max_missed_cycles {
                 return Some(SafeReason::MasterSilent);
             }
-            match NodeState::from_u8(st.master_state) {
+            match NodeState::from_u8(state) {
                 Some(NodeState::Fail) | Some(NodeState::Stop) => Some(SafeReason::MasterStopped),
                 _ => None,
             }
@@ -162,18 +250,7 @@ impl SystemStatus {
     /// Forgets everything heard (as after power-on): not synced, master not heard, no
     /// module states, no mismatch, no sync losses. For restarting a simulated module.
     pub fn clear(&self) {
-        self.with(|st| {
-            *st = StatusState {
-                synced: false,
-                master_heard: false,
-                master_age: 0,
-                master_state: 0,
-                mismatch: None,
-                heard: 0,
-                states: [0; 64],
-                sync_losses: 0,
-            }
-        });
+        self.with(|st| *st = POWER_ON);
     }
 
     /// Clears the latched fingerprint mismatch (after the operator fixed the robot).

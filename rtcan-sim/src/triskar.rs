@@ -24,6 +24,7 @@ use crate::metrics::{Meter, SrtStats, TopicInfo};
 use crate::plant::World;
 use crate::run::{window, Run, SimConfig, CHUNK_NS};
 use crate::slots::overlaps;
+use rtcan::pubsub::supervision::{table_bytes, ModuleTable};
 
 pub mod module;
 pub mod physics;
@@ -47,6 +48,9 @@ pub struct TriskarConfig {
     pub command_until_s: f64,
     /// The gateway (master) stops executing at this time, s (failure injection).
     pub gateway_dies_at_s: Option<f64>,
+    /// Any module (bus index, seconds) stops executing then (failure injection). The run
+    /// then steps one cycle at a time and records the supervision table (`supervision`).
+    pub module_dies_at: Option<(usize, f64)>,
 }
 
 impl Default for TriskarConfig {
@@ -61,6 +65,7 @@ impl Default for TriskarConfig {
             command_from_s: 0.5,
             command_until_s: 8.0,
             gateway_dies_at_s: None,
+            module_dies_at: None,
         }
     }
 }
@@ -73,6 +78,10 @@ pub struct ModuleReport {
     pub synced: bool,
     pub safe_trips: u32,
     pub safe_now: bool,
+    /// Why the safe state is required at the end, and the sync master the module's
+    /// safe-state rule follows then (issue 15: the current one, not the configured one).
+    pub safe_reason: Option<rtcan::pubsub::SafeReason>,
+    pub sync_master: u8,
     /// Motor modules: measured wheel speed (rad/s) and whether the controller is safe.
     pub motor: Option<(f32, bool)>,
 }
@@ -101,7 +110,17 @@ pub struct TriskarRun {
     /// Messages the gateway received: proximity, battery, log; the last log line.
     pub gateway_rx: (u32, u32, u32, String),
     pub modules: Vec<ModuleReport>,
+    /// With `module_dies_at`: the module table of the current sync master after every
+    /// cycle, as decoded from its topic wire form.
+    pub supervision: Vec<SupervisionSample>,
     pub config: TriskarConfig,
+}
+
+/// The sync master's module table at one global time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SupervisionSample {
+    pub t_ns: Nanos,
+    pub table: ModuleTable<{ MODULES.len() }>,
 }
 
 impl TriskarRun {
@@ -166,6 +185,39 @@ fn firmware_filter(filters: &[(u32, u32)]) -> Filter {
     )
 }
 
+/// The module table of the current sync master (the first live module of the master
+/// chain: the configured master, then the backups in rank order), through its wire form.
+fn supervise(bus: &Bus<Box<dyn TriskarModule>>, t: Nanos) -> Option<SupervisionSample> {
+    let ranks = [
+        robot::gateway::BACKUP_RANK,
+        robot::motor1::BACKUP_RANK,
+        robot::motor2::BACKUP_RANK,
+        robot::motor3::BACKUP_RANK,
+        robot::proximity::BACKUP_RANK,
+        robot::psu::BACKUP_RANK,
+    ];
+    let mut backups: Vec<(u8, usize)> = (0..MODULES.len())
+        .filter_map(|n| ranks.get(n).filter(|&&r| r > 0).map(|&r| (r, n)))
+        .collect();
+    backups.sort_unstable();
+    let reporter = core::iter::once(usize::from(robot::MASTER))
+        .chain(backups.into_iter().map(|(_, n)| n))
+        .find(|&n| bus.module(n).is_some_and(|m| m.alive_at(t)))?;
+    let reporter = u8::try_from(reporter).ok()?;
+    let m = bus.module(usize::from(reporter))?;
+    let table = ModuleTable::<{ MODULES.len() }>::snapshot(
+        m.status(),
+        reporter,
+        robot::FINGERPRINT,
+        None,
+        m.health(),
+    );
+    let mut wire = [0u8; table_bytes(MODULES.len())];
+    let n = table.encode(&mut wire)?;
+    let table = ModuleTable::decode(wire.get(..n)?)?;
+    Some(SupervisionSample { t_ns: t, table })
+}
+
 fn s_to_ns(s: f64) -> Nanos {
     (s.max(0.0) * 1e9) as Nanos
 }
@@ -202,7 +254,7 @@ pub(crate) fn build_bus(
         let clock = cfg.sim.clock(n);
         let now = clock.local(0);
         let sh = shared.clone();
-        let m: Box<dyn TriskarModule> = match n {
+        let mut m: Box<dyn TriskarModule> = match n {
             0 => {
                 let mut m = SimModule::new(
                     "gateway",
@@ -272,6 +324,9 @@ pub(crate) fn build_bus(
                 Vec::new(),
             )),
         };
+        if let Some((_, at)) = cfg.module_dies_at.filter(|&(k, _)| k == n) {
+            m.set_dies_at(Some(s_to_ns(at)));
+        }
         let filters = match n {
             0 => robot::gateway::FILTERS,
             1 => robot::motor1::FILTERS,
@@ -314,11 +369,19 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
     let mut kept = Vec::new();
     let mut ov = 0;
     let mut t = 0;
+    let mut supervision = Vec::new();
+    let step = match cfg.module_dies_at {
+        Some(_) => robot::BUS.cycle_ns().max(1),
+        None => CHUNK_NS,
+    };
     // In chunks: frames, fates and figures are measured as they come and dropped, so
     // memory does not grow with the run (docs/SIM.md, Memory).
     while t < end {
-        t = (t + CHUNK_NS).min(end);
+        t = (t + step).min(end);
         bus.run_until(t);
+        if cfg.module_dies_at.is_some() {
+            supervision.extend(supervise(&bus, t));
+        }
         for w in &bus.wire {
             meter.frame(w);
             srt.frame(w);
@@ -371,6 +434,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             synced: m.synced(),
             safe_trips: m.safe_trips(),
             safe_now: m.safe_now(),
+            safe_reason: m.status().safe_reason(),
+            sync_master: m.status().sync_master(),
             motor: m.app().motor(),
         });
     }
@@ -409,6 +474,7 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             std::mem::take(&mut sh.last_log),
         ),
         modules,
+        supervision,
         config: cfg.clone(),
     })
 }

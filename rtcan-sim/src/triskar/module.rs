@@ -184,6 +184,14 @@ pub trait Inspect {
     fn app(&self) -> &App;
     /// SRT publications so far, per transmit index (drained by the measurement).
     fn srt_events(&mut self) -> &mut [(u8, SrtLog)];
+    /// This module's system status (heartbeat ages: the supervision table's input).
+    fn status(&self) -> &'static SystemStatus;
+    /// Engine counters and error counters, for the module table's own row.
+    fn health(&self) -> rtcan::pubsub::EngineHealth;
+    /// The module stops executing at this global time (failure injection).
+    fn set_dies_at(&mut self, at: Option<Nanos>);
+    /// Still executing at global time `g`.
+    fn alive_at(&self, g: Nanos) -> bool;
 }
 
 /// An SRT topic whose publications are followed: tx index, how to read the topic's
@@ -412,6 +420,18 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     }
     fn srt_events(&mut self) -> &mut [(u8, SrtLog)] {
         &mut self.srt_log
+    }
+    fn status(&self) -> &'static SystemStatus {
+        self.status
+    }
+    fn health(&self) -> rtcan::pubsub::EngineHealth {
+        rtcan::pubsub::EngineHealth::new(self.engine.counters(), &self.engine.error_state())
+    }
+    fn set_dies_at(&mut self, at: Option<Nanos>) {
+        self.dies_at = at;
+    }
+    fn alive_at(&self, g: Nanos) -> bool {
+        self.dies_at.is_none_or(|d| g < d)
     }
 }
 
