@@ -219,8 +219,13 @@ impl SlotClock {
     /// Local ns per bus ns, as `2^16 ·` a length: the local length of `bus_ns` × 2^16,
     /// rounded (for the engine's slot map; a multiply, no division).
     pub fn local_q16(&self, bus_ns: Nanos) -> u64 {
-        let d = nanos_i64(bus_ns).saturating_mul(1 << 16);
-        clamp_nanos(scale(d, self.rate_q40))
+        let d = nanos_i64(bus_ns);
+        if d >> 29 == 0 && self.rate_q40.unsigned_abs() <= MAX_RATE_Q40 {
+            // A slot of up to 0.5 s: `d · rate` fits in 64 bits (no 128-bit product).
+            let extra = (d * self.rate_q40 + (1 << (Q - 17))) >> (Q - 16);
+            return clamp_nanos((d << 16) + extra);
+        }
+        clamp_nanos(scale(d.saturating_mul(1 << 16), self.rate_q40))
     }
     /// Bus ns per local ns × 2^32, rounded (the engine's inverse slot map).
     pub fn bus_per_local_q32(&self) -> u64 {
@@ -313,20 +318,25 @@ fn scale(d: i64, k: i64) -> i64 {
     d.saturating_add(i64::try_from(p).unwrap_or(if p < 0 { i64::MIN } else { i64::MAX }))
 }
 
-/// `B = 1 / (1 + A) − 1 = −A + A² − A³ + …` in units of 2^-40, by Horner's rule
-/// (`s ← −A · (1 + s)`): for |A| <= 1 % (`MAX_RATE_PPB`) the terms past A⁶ are below
-/// 10⁻¹² relative (0.01 ns over the longest bridged gap, 8.6 s). No division, 64-bit
-/// products only: `A · s` from both shifted by 6 bits (|A|, |s| < 2^34, so the
-/// product stays below 2^56), off by under 2 units of 2^-40.
+/// `B = 1 / (1 + A) − 1 = −A + A² − A³ + …` in units of 2^-40, summed until the term
+/// vanishes (|A| <= 1 % (`MAX_RATE_PPB`): at most 6 terms, each 100 times smaller;
+/// 50 ppm: 2 terms). No division, 64-bit products only: `A^k · A` from both shifted by 6
+/// bits (|A^k| <= |A| < 2^34, so the product stays below 2^56), off by under 2 units of
+/// 2^-40 in all (10⁻¹²).
 fn inverse_q40(a: i64) -> i64 {
     if a.unsigned_abs() > MAX_RATE_Q40 {
         return 0;
     }
-    let mut s = 0i64;
+    let (mut sum, mut term) = (0i64, a);
     for _ in 0..6 {
-        s = -(a + (((a >> 6) * (s >> 6) + (1 << 27)) >> 28));
+        if term == 0 {
+            break;
+        }
+        sum -= term;
+        // A^(k+1) with the sign flipped: the series alternates.
+        term = -(((term >> 6) * (a >> 6) + (1 << 27)) >> 28);
     }
-    s
+    sum
 }
 
 /// `err · 2^40 / d_bus` rounded, for `|err| <= d_bus / 100` and `d_bus > 0`: the one
