@@ -105,3 +105,34 @@ pub fn images_to_change(old: &Plan, new: &Plan) -> Vec<ImageChange> {
     }
     out
 }
+
+/// JSON form for `check --against`: `[{"module": .., "reasons": [..]}, ..]`.
+pub fn json(changes: &[ImageChange]) -> serde_json::Value {
+    serde_json::Value::Array(
+        changes
+            .iter()
+            .map(|c| serde_json::json!({ "module": c.module, "reasons": c.reasons }))
+            .collect(),
+    )
+}
+
+/// Text form for `check --against`.
+pub fn text(changes: &[ImageChange]) -> String {
+    let mut s = format!("images to change: {}\n", changes.len());
+    for c in changes {
+        s.push_str(&format!("  {}\n", c.module));
+        for r in &c.reasons {
+            s.push_str(&format!("    - {r}\n"));
+        }
+    }
+    s
+}
+
+/// `check --json` output with `images_to_change` added when `--against` was given.
+pub fn json_text(a: &crate::Analysis, changes: Option<&[ImageChange]>) -> String {
+    let mut v = crate::report::json(a);
+    if let (Some(c), Some(obj)) = (changes, v.as_object_mut()) {
+        obj.insert("images_to_change".to_string(), json(c));
+    }
+    serde_json::to_string_pretty(&v).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+}
