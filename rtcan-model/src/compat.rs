@@ -22,7 +22,7 @@ fn topic_view(t: &TopicPlan) -> String {
 }
 
 /// Topics a module sends or receives on the bus, by name.
-fn bus_topics<'a>(plan: &'a Plan, module: usize) -> Vec<&'a TopicPlan> {
+fn bus_topics(plan: &Plan, module: usize) -> Vec<&TopicPlan> {
     let Some(m) = plan.modules.get(module) else {
         return Vec::new();
     };
