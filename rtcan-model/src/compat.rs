@@ -35,6 +35,40 @@ fn bus_topics(plan: &Plan, module: usize) -> Vec<&TopicPlan> {
     v
 }
 
+/// The bus fields that differ, `name old -> new`, comma-separated.
+fn bus_diff(o: &rtcan_core::tables::BusConfig, n: &rtcan_core::tables::BusConfig) -> String {
+    let mut d = Vec::new();
+    let mut f = |name: &str, a: String, b: String| {
+        if a != b {
+            d.push(format!("{name} {a} -> {b}"));
+        }
+    };
+    f("bitrate", o.bitrate.to_string(), n.bitrate.to_string());
+    f(
+        "slots_per_cycle",
+        o.slots_per_cycle.to_string(),
+        n.slots_per_cycle.to_string(),
+    );
+    f("slot_ns", o.slot_ns.to_string(), n.slot_ns.to_string());
+    f(
+        "hyperperiod_cycles",
+        o.hyperperiod_cycles.to_string(),
+        n.hyperperiod_cycles.to_string(),
+    );
+    f(
+        "cycle_counter_wrap",
+        o.cycle_counter_wrap.to_string(),
+        n.cycle_counter_wrap.to_string(),
+    );
+    f(
+        "laxity",
+        format!("{:?}", o.laxity),
+        format!("{:?}", n.laxity),
+    );
+    f("guard_ns", o.guard_ns.to_string(), n.guard_ns.to_string());
+    d.join(", ")
+}
+
 fn without_fingerprint(mut t: ModuleTables) -> ModuleTables {
     t.bus.fingerprint = 0;
     t
@@ -58,7 +92,7 @@ pub fn images_to_change(old: &Plan, new: &Plan) -> Vec<ImageChange> {
             _ => continue,
         };
         if ot.bus != nt.bus {
-            reasons.push(format!("bus parameters: {:?} -> {:?}", ot.bus, nt.bus));
+            reasons.push(format!("bus parameters: {}", bus_diff(&ot.bus, &nt.bus)));
         }
         if ot.module != nt.module {
             reasons.push(format!("module index {} -> {}", ot.module, nt.module));
