@@ -148,3 +148,45 @@ fn invalid_utf8_names_the_byte() {
     );
     assert!(err.contains(":2:12\n"), "{err}");
 }
+
+#[test]
+fn against_lists_images_to_change() {
+    let dir = std::env::temp_dir().join(format!("rtcan-against-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = std::fs::read_to_string(root().join("robot.toml")).unwrap();
+    let new = dir.join("new.toml");
+    std::fs::write(
+        &new,
+        src.replacen("period = \"40ms\"", "period = \"80ms\"", 1),
+    )
+    .unwrap();
+    let newp = new.to_str().unwrap();
+    // Same file: nothing to rebuild.
+    let (code, out, _) = rtcan(&["check", "robot.toml", "--against", "robot.toml"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("images to change: 0\n"), "{out}");
+    let (code, out, _) = rtcan(&["check", newp, "--against", "robot.toml"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("  proximity\n"), "{out}");
+    assert!(out.contains("    - topic \"proximity\": "), "{out}");
+    let (code, out, _) = rtcan(&["check", newp, "--json", "--against", "robot.toml"]);
+    assert_eq!(code, 0);
+    let at = out
+        .find("\"images_to_change\": [")
+        .expect("images_to_change field");
+    assert!(out[at..].contains("\"module\": \"gateway\""), "{out}");
+    assert!(out[at..].contains("\"module\": \"proximity\""), "{out}");
+    // Missing argument and a bad old file are usage errors.
+    assert_eq!(rtcan(&["check", "robot.toml", "--against"]).0, 2);
+    assert_eq!(
+        rtcan(&[
+            "check",
+            "robot.toml",
+            "--against",
+            "robots/broken/none.toml"
+        ])
+        .0,
+        2
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

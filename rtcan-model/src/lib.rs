@@ -14,6 +14,7 @@
     )
 )]
 
+pub mod compat;
 pub mod costs;
 pub mod diag;
 pub mod filters;
