@@ -81,17 +81,39 @@ fn thread_cpu_seconds() -> f64 {
 fn first_of(bus: &Bus, id: u32) -> Option<u64> {
     bus.log
         .iter()
-        .find(|(_, f, _)| f.id == id)
+        .find(|(_, f, _)| same_frame(f.id, id))
         .map(|(_, _, s)| *s)
 }
 
-/// Frames with identifier `id` and SOF in [from, to) bit times.
+/// Frames like `id` (same topic and fragment counter, any transfer ID) with SOF in
+/// [from, to) bit times.
 fn count_of(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
     bus.log
         .iter()
-        .filter(|(_, f, s)| f.id == id && (from..to).contains(s))
+        .filter(|(_, f, s)| same_frame(f.id, id) && (from..to).contains(s))
         .count() as u64
 }
+
+/// True if wire identifier `wire` is the frame `want` names: the same laxity and message
+/// ID, and the same fragment counter once the transfer ID (docs/PROTOCOL.md §7.1: the
+/// fragment field is `tid << k | counter` for a multi-frame message) is masked off.
+/// `want`'s field is its counter with transfer ID 0; the topic's frame count comes from
+/// the table below.
+fn same_frame(wire: u32, want: u32) -> bool {
+    if wire & !0x7F != want & !0x7F {
+        return false;
+    }
+    let count = FRAMES
+        .iter()
+        .find(|(base, _)| base & !0x7F == want & !0x7F)
+        .map_or(1, |(_, n)| *n);
+    let counter = |id: u32| rtcan_core::fragment::split_field(count, (id & 0x7F) as u8).1;
+    counter(wire) == counter(want)
+}
+
+/// Frames per message of the multi-frame HRT topics (robot.toml: wheel_setpoints 12 B,
+/// odometry 24 B).
+const FRAMES: [(u32, u8); 2] = [(WHEEL_SETPOINTS, 2), (ODOMETRY, 3)];
 
 // Identifiers of the HRT topics as the images send them (checked against robot.toml's
 // rates in `five_seconds_of_triskar2`): encoder1 0xA200, wheel_setpoints 0xA380/0xA381,
@@ -157,7 +179,7 @@ fn five_seconds_of_triskar2() {
         (WHEEL_SETPOINTS + 1, 100),
         (ENCODER3, 200),
         (ODOMETRY, 50),
-        (ODOMETRY + 3, 50),
+        (ODOMETRY + 2, 50),
         (PROXIMITY, 25),
     ] {
         let n = count_of(&bus, id, from, to);
