@@ -8,128 +8,16 @@
 //! benchmark schedule executed exactly, SRT in free windows only, fragmentation end to
 //! end, deadline misses and queue exhaustion reported, sync loss, malformed input.
 mod common;
+mod paper_bus;
 
 use common::*;
-use rtcan_core::admission::{admit, build_masks, HrtRequest, Placement};
+use paper_bus::{bus, msg_id, paper, Paper, FP, PERIODS, SLOT_NS, SPC, S_SIZE};
 use rtcan_core::driver::{Event, TxOutcome};
-use rtcan_core::fragment::{counter_of, wire_len};
+use rtcan_core::fragment::counter_of;
 use rtcan_core::id::{CanId, Class, MsgId};
 use rtcan_core::laxity::LaxityEncoding;
 use rtcan_core::tables::{BusConfig, CalEntry, NodeTables, RxTopic, TxTopic};
 use rtcan_core::Frame;
-
-const SPC: u8 = 60;
-const SLOT_NS: u64 = 166_666;
-const FP: u32 = 0xC0FF_EE01;
-/// Per node: H_A 1 ms (6 slots), H_B 5 ms (30), H_C 10 ms (60), then S (SRT, 20 B,
-/// 10 ms deadline) and N (NRT, 8 B).
-const PERIODS: [u32; 3] = [6, 30, 60];
-const S_SIZE: u16 = 20;
-
-fn msg_id(node: usize, topic: usize) -> MsgId {
-    MsgId(0x0140 + (node as u16) * 16 + topic as u16)
-}
-
-fn bus() -> BusConfig {
-    BusConfig {
-        bitrate: 1_000_000,
-        slots_per_cycle: SPC,
-        slot_ns: SLOT_NS,
-        hyperperiod_cycles: 1,
-        cycle_counter_wrap: 1 << 15,
-        laxity: LaxityEncoding::Linear {
-            unit_ns: SLOT_NS as u32,
-        },
-        guard_ns: 2_000,
-        fingerprint: FP,
-    }
-}
-
-struct Paper {
-    tables: Vec<NodeTables<'static>>,
-    placements: Vec<Placement>,
-}
-
-fn paper(nodes: usize) -> Paper {
-    let reqs: Vec<HrtRequest> = (0..nodes)
-        .flat_map(|_| {
-            PERIODS.iter().map(|&p| HrtRequest {
-                period_slots: p,
-                fragments: 1,
-            })
-        })
-        .collect();
-    let mut placements = vec![Placement::default(); reqs.len()];
-    admit(SPC as u32, &reqs, &mut placements, 1_000_000).expect("paper set is admissible");
-    let mut masks = vec![0u64; 1];
-    let cycles = build_masks(SPC as u32, &reqs, &placements, &mut masks).expect("masks");
-    assert_eq!(cycles, 1);
-    let masks: &'static [u64] = Box::leak(masks.into_boxed_slice());
-    let mut tables = Vec::new();
-    for n in 0..nodes {
-        let mut tx = Vec::new();
-        for (k, _) in PERIODS.iter().enumerate() {
-            tx.push(TxTopic {
-                msg_id: msg_id(n, k),
-                class: Class::Hrt,
-                size: 8,
-                deadline_ns: 0,
-            });
-        }
-        tx.push(TxTopic {
-            msg_id: msg_id(n, 3),
-            class: Class::Srt,
-            size: S_SIZE,
-            deadline_ns: 10_000_000,
-        });
-        tx.push(TxTopic {
-            msg_id: msg_id(n, 4),
-            class: Class::Nrt,
-            size: 8,
-            deadline_ns: 0,
-        });
-        let mut cal = Vec::new();
-        for k in 0..PERIODS.len() {
-            let pl = placements[n * 3 + k];
-            let mut s = pl.phase_slot;
-            while s < SPC as u32 {
-                cal.push(CalEntry {
-                    slot: s,
-                    tx: k as u8,
-                    fragment: 0,
-                });
-                s += PERIODS[k];
-            }
-        }
-        cal.sort_by_key(|c| c.slot);
-        let mut rx = Vec::new();
-        let mut off = 0u16;
-        for m in (0..nodes).filter(|&m| m != n) {
-            for k in 0..5 {
-                let size = if k == 3 { S_SIZE } else { 8 };
-                rx.push(RxTopic {
-                    msg_id: msg_id(m, k),
-                    size,
-                    arena_offset: 0,
-                });
-            }
-        }
-        rx.sort_by_key(|r| r.msg_id);
-        for r in rx.iter_mut() {
-            r.arena_offset = off;
-            off += wire_len(r.size as usize) as u16;
-        }
-        tables.push(NodeTables {
-            bus: bus(),
-            module: n as u8,
-            tx: Box::leak(tx.into_boxed_slice()),
-            rx: Box::leak(rx.into_boxed_slice()),
-            calendar: Box::leak(cal.into_boxed_slice()),
-            master_masks: if n == 0 { masks } else { &[] },
-        });
-    }
-    Paper { tables, placements }
-}
 
 /// Master (ideal clock, started at t=0 so cycle 0 starts at one slot) and slaves with
 /// ±1000 ppm and offsets.
