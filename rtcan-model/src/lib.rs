@@ -14,6 +14,7 @@
     )
 )]
 
+pub mod bridge_keys;
 pub mod compat;
 pub mod costs;
 pub mod diag;
@@ -124,6 +125,9 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
         }
         Ok(root) => {
             model = validate::validate(&root, &mut items);
+            if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
+                m.bridge = bridge_keys::validate(file, entries, m, &mut items);
+            }
             if let (Some(m), syntax::Kind::Table(entries)) = (&model, &root.kind) {
                 params::validate(entries, m, &mut items);
             }

@@ -328,6 +328,8 @@ pub struct Model {
     pub nodes: Vec<Node>,
     /// Topics in file order.
     pub topics: Vec<Topic>,
+    /// `[robot]` and the topics' outside-world keys (`rtcan_model::bridge_keys`).
+    pub bridge: crate::bridge_keys::BridgeDecl,
 }
 
 impl Model {

@@ -189,6 +189,9 @@ pub struct Plan {
     pub load: Load,
     /// Robot fingerprint (FNV-1a 32 of the canonical plan), carried in heartbeats.
     pub fingerprint: u32,
+    /// Robot name, writable / link / ROS 2 topics (not part of the fingerprint: they do
+    /// not change the bus).
+    pub bridge: crate::bridge_keys::BridgeDecl,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -650,6 +653,7 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
         admission_steps: admitted.stats.steps,
         load,
         fingerprint: 0,
+        bridge: model.bridge.clone(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)

@@ -15,7 +15,7 @@ use rtcan_core::timing::{bits_to_ns, worst_case_bits};
 use rtcan_core::Class;
 
 const TOP_KEYS: &[&str] = &[
-    "bus", "types", "modules", "nodes", "topics", "sim", "params",
+    "bus", "types", "modules", "nodes", "topics", "sim", "params", "robot",
 ];
 const BUS_KEYS: &[&str] = &[
     "bitrate",
@@ -41,6 +41,10 @@ const TOPIC_KEYS: &[&str] = &[
     "deadline",
     "subscribers",
     "queue",
+    // Outside-world keys, read by `bridge_keys`.
+    "writable",
+    "link",
+    "ros2",
 ];
 const SUB_KEYS: &[&str] = &["node", "queue"];
 
@@ -416,6 +420,7 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
         modules,
         nodes,
         topics,
+        bridge: crate::bridge_keys::BridgeDecl::default(),
     })
 }
 
