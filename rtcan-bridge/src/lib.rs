@@ -1,8 +1,9 @@
 //! Every topic of a robot on Zenoh: each message the bus carries is put on
 //! `rtcan/<robot>/<topic>` (a JSON object with robot.toml's field names, or the raw
 //! little-endian payload with `raw`); samples that remote Zenoh nodes put on those keys
-//! are commands, accepted only for the topics the link takes from outside (the gateway's
-//! `teleop`), everything else refused and counted. The bus is any `rtcan_host::Link`.
+//! are commands, accepted only for the topics robot.toml marks `writable` (Triskar2:
+//! `teleop`), everything else refused and counted. `ros2` speaks rmw_zenoh's format for
+//! the topics robot.toml maps to standard ROS 2 types. The bus is any `rtcan_host::Link`.
 #![cfg_attr(
     test,
     allow(
@@ -12,6 +13,8 @@
         clippy::panic
     )
 )]
+
+pub mod ros2;
 
 use rtcan_host::value::{from_json, to_json};
 use rtcan_host::Link;
@@ -28,15 +31,6 @@ pub const PREFIX: &str = "rtcan";
 /// The key of `topic` of robot `robot`.
 pub fn key(robot: &str, topic: &str) -> String {
     format!("{PREFIX}/{robot}/{topic}")
-}
-
-/// The robot's name: robot.toml's file stem (robot.toml has no name of its own yet).
-pub fn robot_name(robot_toml: &std::path::Path) -> String {
-    robot_toml
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("robot")
-        .to_string()
 }
 
 /// Bridge options.
@@ -189,16 +183,8 @@ impl<'c> Bridge<'c> {
         let Some(batch) = link.recv()? else {
             return Ok(false);
         };
-        for f in batch {
-            let e = Entry {
-                time_ns: f.time_ns,
-                iface: String::new(),
-                frame: f.frame,
-                standard: false,
-            };
-            if let Some(Decoded::Message { topic, payload, .. }) = self.dec.push(&e) {
-                self.put(topic, &payload)?;
-            }
+        for (topic, payload) in messages(&mut self.dec, batch) {
+            self.put(topic, &payload)?;
         }
         Ok(true)
     }
@@ -217,4 +203,21 @@ impl<'c> Bridge<'c> {
         self.counts.published += 1;
         Ok(())
     }
+}
+
+/// The whole messages (catalog topic index, payload) a batch of bus frames completes.
+pub fn messages(dec: &mut Decoder<'_>, batch: Vec<rtcan_host::Stamped>) -> Vec<(usize, Vec<u8>)> {
+    let mut out = Vec::new();
+    for f in batch {
+        let e = Entry {
+            time_ns: f.time_ns,
+            iface: String::new(),
+            frame: f.frame,
+            standard: false,
+        };
+        if let Some(Decoded::Message { topic, payload, .. }) = dec.push(&e) {
+            out.push((topic, payload.to_vec()));
+        }
+    }
+    out
 }

@@ -1,6 +1,6 @@
 //! `rtcan bridge`: every topic of the bus on Zenoh under `rtcan/<robot>/<topic>`, and
 //! commands from Zenoh for the topics writable from outside (docs/BRIDGE.md).
-use rtcan_bridge::{key, robot_name, Bridge, Options};
+use rtcan_bridge::{key, Bridge, Options};
 use rtcan_host::Source;
 
 use crate::link_args::{LinkArgs, HELP};
@@ -29,7 +29,8 @@ fn usage() -> String {
          puts every message on Zenoh key rtcan/<robot>/<topic> (JSON objects; --raw: the\n\
          little-endian payload); samples other Zenoh nodes put on rtcan/<robot>/teleop are\n\
          published on the bus, samples on other topics are refused and counted.\n\
-         <robot> is --robot-name or robot.toml's file stem. ENDPOINT: e.g. tcp/127.0.0.1:7447\n\n{HELP}"
+         <robot> is --robot-name or robot.toml's `[robot] name` (default: its file stem).\n\
+         ENDPOINT: e.g. tcp/127.0.0.1:7447\n\n{HELP}"
     )
 }
 
@@ -75,16 +76,16 @@ pub fn run(args: &[String]) -> i32 {
 
 fn bridge(la: &LinkArgs, mut opts: Options, name: Option<String>) -> Result<(), String> {
     let (plan, cat) = la.robot()?;
-    opts.robot = name.unwrap_or_else(|| robot_name(std::path::Path::new(&plan.file)));
+    opts.robot = name.unwrap_or_else(|| plan.bridge.robot.clone());
     if opts.robot.is_empty() || opts.robot.contains(['/', '*', '$', '?', '#']) {
         return Err(format!(
             "robot name `{}` cannot be a Zenoh key chunk (give --robot-name)",
             opts.robot
         ));
     }
-    // What the link takes from outside: the gateway forwards teleop (sim and serial).
+    // What robot.toml marks writable, on a link that can send (a replay cannot).
     opts.writable = match la.source {
-        Source::Sim(_) | Source::Serial(_) => vec!["teleop".to_string()],
+        Source::Sim(_) | Source::Serial(_) => plan.bridge.writable(),
         _ => Vec::new(),
     };
     let mut link = la.open(&plan)?;

@@ -242,7 +242,7 @@ fn gateway_on_pty(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> (Strin
             .unwrap();
         let cat = rtcan_sim::decode::plan_catalog(&plan);
         let robot = rtcan_host::sim::SimLink::start(&plan, 5.0).unwrap();
-        let mut gw = rtcan_host::gateway::SimGateway::new(robot, master, &cat);
+        let mut gw = rtcan_host::gateway::SimGateway::new(robot, master, &cat, &plan.bridge.link);
         while !stop.load(std::sync::atomic::Ordering::Relaxed) {
             gw.step(&mut |_| {}).unwrap();
         }

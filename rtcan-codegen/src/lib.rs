@@ -6,6 +6,7 @@
 //! - one struct per message type, implementing `rtcan::pubsub::Message`;
 //! - `topics::NAME: rtcan::TopicInfo` for every topic;
 //! - `BUS`, `FINGERPRINT`, `MASTER_MASKS`, `MASTER`;
+//! - `link::NAME` numbers and `link::TOPICS` of the gateway's serial link;
 //! - `pub mod <module>` per module: tables, filters, engine sizes, topic statics, typed
 //!   handles per node and the `ModuleHost` glue.
 #![cfg_attr(
@@ -18,6 +19,7 @@
     )
 )]
 
+mod link;
 mod lit;
 mod message;
 mod module;
@@ -49,6 +51,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
     let messages = plan.types.iter().map(message::message);
     let topics = tables::topic_infos(plan);
     let bus = tables::bus(plan);
+    let link = link::link(plan);
     let modules = plan
         .modules
         .iter()
@@ -59,6 +62,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
         #(#messages)*
         #topics
         #bus
+        #link
         #(#modules)*
         /// Every module's statics back to power-on (`<module>::reset`).
         pub fn reset() {

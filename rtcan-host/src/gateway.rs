@@ -1,13 +1,16 @@
 //! The gateway's side of the serial link, HAL-free, on the simulated robot: what the
 //! Triskar2 gateway firmware does with `triskar2_link` (examples/triskar2/src/io.rs),
 //! run against `rtcan_sim::live` so the host side can be tested end to end over a real
-//! pty. Robot → host: every odometry, proximity, battery and log message the bus carries;
-//! host → robot: `teleop` commands, published by the gateway on the bus.
+//! pty. Robot → host: every message of a `link = "out"` topic the bus carries;
+//! host → robot: the `link = "in"` topics, published by the gateway on the bus (numbers
+//! and directions from robot.toml through the plan, as the firmware's generated
+//! `rtcan::robot_toml::link`).
 use std::io::{Read, Write};
 
+use rtcan_model::bridge_keys::{LinkDir, LinkTopic};
 use rtcan_sim::candump::Entry;
 use rtcan_sim::decode::{Catalog, Decoded, Decoder as BusDecoder};
-use triskar2_link::{topic, Decoder, LinkStats, MAX_PAYLOAD, OVERHEAD};
+use triskar2_link::{Decoder, LinkStats, MAX_PAYLOAD, OVERHEAD};
 
 use crate::link::Link;
 use crate::sim::SimLink;
@@ -19,15 +22,18 @@ pub struct SimGateway<'c, P: Read + Write> {
     link_rx: Decoder,
     bus: BusDecoder<'c>,
     cat: &'c Catalog,
+    link: Vec<LinkTopic>,
     /// Frames written to the host.
     pub sent: u64,
 }
 
 impl<'c, P: Read + Write> SimGateway<'c, P> {
     /// The gateway of `robot` (its catalog `cat`) on `port` (non-blocking or with a
-    /// read timeout: `step` reads what is there).
-    pub fn new(robot: SimLink, port: P, cat: &'c Catalog) -> Self {
+    /// read timeout: `step` reads what is there), forwarding the link topics `link`
+    /// (the plan's `bridge.link`).
+    pub fn new(robot: SimLink, port: P, cat: &'c Catalog, link: &[LinkTopic]) -> Self {
         SimGateway {
+            link: link.to_vec(),
             robot,
             port,
             link_rx: Decoder::new(),
@@ -59,13 +65,19 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
         };
         let mut cmds = Vec::new();
         for &b in buf.get(..n).unwrap_or(&[]) {
-            if let Some((topic::TELEOP, p)) = self.link_rx.push(b) {
-                cmds.push(p.to_vec());
+            if let Some((n, p)) = self.link_rx.push(b) {
+                let to_robot = self
+                    .link
+                    .iter()
+                    .find(|l| l.number == n && l.dir == LinkDir::In);
+                if let Some(l) = to_robot {
+                    cmds.push((l.name.clone(), p.to_vec()));
+                }
             }
         }
-        for c in cmds {
+        for (name, c) in cmds {
             // A command of the wrong size is dropped, as the firmware does.
-            let _ = self.robot.publish("teleop", &c);
+            let _ = self.robot.publish(&name, &c);
         }
         let mut out = Vec::new();
         for s in self.robot.recv()?.unwrap_or_default() {
@@ -82,9 +94,11 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
                 continue;
             };
             let name = self.cat.topics.get(t).map_or("", |t| t.name.as_str());
-            let Some(&(lt, _)) = topic::NAMES
+            let Some(lt) = self
+                .link
                 .iter()
-                .find(|(n, nm)| *nm == name && *n != topic::TELEOP)
+                .find(|l| l.name == name && l.dir == LinkDir::Out)
+                .map(|l| l.number)
             else {
                 continue;
             };

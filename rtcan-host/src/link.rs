@@ -51,6 +51,7 @@ pub fn open(
         Source::Serial(port) => Ok(Box::new(crate::serial::SerialLink::open(
             port,
             &rtcan_sim::decode::plan_catalog(plan),
+            &plan.bridge.link,
         )?)),
         Source::Can(iface) => Err(format!(
             "--can {iface}: SocketCAN is not built into this rtcan \

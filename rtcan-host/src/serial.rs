@@ -2,7 +2,9 @@
 //! (COBS + CRC-16) both ways. The link carries whole topic messages, not CAN frames;
 //! each received message is handed out as the frames the bus carried it in (same message
 //! ID and fragmentation, `rtcan_core::fragment`), stamped with wall time since the link
-//! opened, so every command decodes it the same way. The host sends `teleop`.
+//! opened, so every command decodes it the same way. Which topics cross the link, with
+//! which numbers and in which direction, is robot.toml's `link` (the plan's
+//! `bridge.link`): the host sends the `link = "in"` topics.
 use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::AsRawFd;
@@ -10,13 +12,11 @@ use std::time::Instant;
 
 use rtcan_core::fragment::{fragment_count, fragment_data, fragment_field};
 use rtcan_core::{CanId, Frame, MsgId, Nanos};
+use rtcan_model::bridge_keys::{LinkDir, LinkTopic};
 use rtcan_sim::decode::Catalog;
-use triskar2_link::{topic, Decoder, LinkStats, MAX_PAYLOAD, OVERHEAD};
+use triskar2_link::{Decoder, LinkStats, MAX_PAYLOAD, OVERHEAD};
 
 use crate::link::{Link, Stamped};
-
-/// Link topics the host may send (the gateway forwards them onto the bus).
-pub const HOST_TOPICS: [u8; 1] = [topic::TELEOP];
 
 /// Puts the terminal `fd` in raw mode with reads that return after 100 ms of silence.
 pub fn make_raw(fd: i32) -> Result<(), String> {
@@ -45,8 +45,10 @@ pub fn make_raw(fd: i32) -> Result<(), String> {
 pub struct SerialLink<P: Read + Write> {
     port: P,
     dec: Decoder,
-    /// Link topic → (message ID, payload size) on the bus.
+    /// Robot → host link topic → (message ID, payload size) on the bus.
     topics: Vec<(u8, MsgId, usize)>,
+    /// Host → robot link topics.
+    to_robot: Vec<LinkTopic>,
     tid: u8,
     started: Instant,
     now_ns: Nanos,
@@ -54,31 +56,39 @@ pub struct SerialLink<P: Read + Write> {
 
 impl SerialLink<File> {
     /// Opens the serial port (or pty) at `path` in raw mode.
-    pub fn open(path: &str, cat: &Catalog) -> Result<Self, String> {
+    pub fn open(path: &str, cat: &Catalog, link: &[LinkTopic]) -> Result<Self, String> {
         let port = std::fs::OpenOptions::new()
             .read(true)
             .write(true)
             .open(path)
             .map_err(|e| format!("--serial {path}: {e}"))?;
         make_raw(port.as_raw_fd()).map_err(|e| format!("--serial {path}: {e}"))?;
-        Ok(Self::new(port, cat))
+        Ok(Self::new(port, cat, link))
     }
 }
 
 impl<P: Read + Write> SerialLink<P> {
-    /// A link over `port` (already configured) for the robot `cat` describes.
-    pub fn new(port: P, cat: &Catalog) -> Self {
-        let topics = topic::NAMES
+    /// A link over `port` (already configured) for the robot `cat` describes, carrying
+    /// the link topics `link` (the plan's `bridge.link`).
+    pub fn new(port: P, cat: &Catalog, link: &[LinkTopic]) -> Self {
+        let topics = link
             .iter()
-            .filter_map(|(n, name)| {
-                let t = cat.topics.iter().find(|t| t.name == *name)?;
-                Some((*n, MsgId(t.msg_id), usize::from(t.size)))
+            .filter(|l| l.dir == LinkDir::Out)
+            .filter_map(|l| {
+                let t = cat.topics.iter().find(|t| t.name == l.name)?;
+                Some((l.number, MsgId(t.msg_id), usize::from(t.size)))
             })
+            .collect();
+        let to_robot = link
+            .iter()
+            .filter(|l| l.dir == LinkDir::In)
+            .cloned()
             .collect();
         SerialLink {
             port,
             dec: Decoder::new(),
             topics,
+            to_robot,
             tid: 0,
             started: Instant::now(),
             now_ns: 0,
@@ -140,12 +150,17 @@ impl<P: Read + Write> Link for SerialLink<P> {
     }
 
     fn publish(&mut self, name: &str, payload: &[u8]) -> Result<(), String> {
-        let t = topic::NAMES
+        let t = self
+            .to_robot
             .iter()
-            .find(|(n, nm)| *nm == name && HOST_TOPICS.contains(n))
-            .map(|(n, _)| *n)
+            .find(|l| l.name == name)
+            .map(|l| l.number)
             .ok_or_else(|| {
-                format!("the gateway link takes only teleop from the host, not `{name}`")
+                let names: Vec<&str> = self.to_robot.iter().map(|l| l.name.as_str()).collect();
+                format!(
+                    "the gateway link takes only {} from the host, not `{name}` (robot.toml `link = \"in\"`)",
+                    if names.is_empty() { "nothing".to_string() } else { names.join(", ") }
+                )
             })?;
         let mut frame = [0u8; MAX_PAYLOAD + OVERHEAD];
         let n = triskar2_link::encode(t, payload, &mut frame)

@@ -75,7 +75,7 @@ fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
         let cat = plan_catalog(&plan);
         // Five times real time, so the test is short; the link keeps up.
         let robot = SimLink::start(&plan, 5.0).unwrap();
-        let mut gw = SimGateway::new(robot, master, &cat);
+        let mut gw = SimGateway::new(robot, master, &cat, &plan.bridge.link);
         let mut dropped = 0u32;
         let mut delimiters = 0u64;
         // Every 40th frame of the robot loses its 7th-last byte on the line.
@@ -101,7 +101,7 @@ fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
 
     let plan = plan();
     let cat = plan_catalog(&plan);
-    let mut host = SerialLink::open(&path, &cat).unwrap();
+    let mut host = SerialLink::open(&path, &cat, &plan.bridge.link).unwrap();
     // Garbage on the line before the first command (a half frame, a bad frame): the
     // gateway drops it and resynchronises on the delimiters.
     {
@@ -115,7 +115,7 @@ fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
     assert!(host
         .publish("odometry", &[0; 24])
         .unwrap_err()
-        .contains("only teleop"));
+        .contains("only teleop from the host, not `odometry`"));
 
     let mut dec = Decoder::new(&cat);
     let (mut odometry, mut proximity, mut last_x) = (0, 0, 0.0);
@@ -171,4 +171,100 @@ fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
         "{host_stats:?}"
     );
     assert!(u64::from(host_stats.frames) + u64::from(dropped) <= sent);
+}
+
+/// An in-memory serial line: what the gateway writes is kept, reads return nothing.
+#[derive(Default)]
+struct Line(Vec<u8>);
+
+impl std::io::Read for Line {
+    fn read(&mut self, _: &mut [u8]) -> std::io::Result<usize> {
+        Ok(0)
+    }
+}
+
+impl std::io::Write for Line {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.0.extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn the_link_carries_exactly_the_topics_robot_toml_declares() {
+    // The model's limit for link topics is the link's frame size.
+    assert_eq!(
+        rtcan_model::bridge_keys::LINK_MAX_PAYLOAD,
+        triskar2_link::MAX_PAYLOAD
+    );
+    let src =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml")).unwrap();
+    // Triskar2 as declared, and with encoder1 on the link instead of proximity.
+    let changed = src
+        .replace(
+            "link = \"out\"\nros2 = \"sensor_msgs/msg/Range\"",
+            "ros2 = \"sensor_msgs/msg/Range\"",
+        )
+        .replace(
+            "subscribers = [{ node = \"odometry\", queue = 2 }]\n\n[topics.encoder2]",
+            "subscribers = [{ node = \"odometry\", queue = 2 }]\nlink = \"out\"\n\n[topics.encoder2]",
+        );
+    assert_ne!(src, changed);
+    for (text, want) in [
+        (
+            &src,
+            vec![
+                (2u8, "odometry"),
+                (3, "proximity"),
+                (4, "battery"),
+                (5, "log"),
+            ],
+        ),
+        (
+            &changed,
+            vec![(2, "encoder1"), (3, "odometry"), (4, "battery"), (5, "log")],
+        ),
+    ] {
+        let plan = rtcan_model::Robot::parse("robot.toml", text)
+            .map_err(|d| d.render())
+            .unwrap();
+        let cat = plan_catalog(&plan);
+        let robot = SimLink::start(&plan, 0.0).unwrap();
+        let mut line = Line::default();
+        {
+            let mut gw = SimGateway::new(robot, &mut line, &cat, &plan.bridge.link);
+            // 1.1 s of bus time: every periodic topic and the 1 Hz battery at least once.
+            for _ in 0..110 {
+                gw.step(&mut |_| {}).unwrap();
+            }
+        }
+        // Decode what went down the line with the link's own decoder.
+        let mut d = triskar2_link::Decoder::new();
+        let mut seen = std::collections::BTreeMap::new();
+        for &b in &line.0 {
+            if let Some((n, p)) = d.push(b) {
+                let size = plan
+                    .bridge
+                    .link
+                    .iter()
+                    .find(|l| l.number == n)
+                    .unwrap()
+                    .size;
+                assert_eq!(p.len(), size, "link topic {n}");
+                *seen.entry(n).or_insert(0u32) += 1;
+            }
+        }
+        let got: Vec<(u8, &str)> = seen
+            .keys()
+            .map(|n| {
+                let l = plan.bridge.link.iter().find(|l| l.number == *n).unwrap();
+                (*n, l.name.as_str())
+            })
+            .collect();
+        assert_eq!(got, want, "{seen:?}");
+        assert_eq!(d.stats().bad_check + d.stats().malformed, 0);
+    }
 }

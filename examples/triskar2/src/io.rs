@@ -18,12 +18,21 @@ use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{Enable, Rcc, Reset};
 use rtcan_core::time::Nanos;
 use rtcan_pubsub::Message;
-use triskar2_link::{topic, Decoder};
+use triskar2_link::Decoder;
 use triskar2_nodes::app::{GatewayHw, MotorHw, ProximityHw, PsuHw};
 use triskar2_nodes::Twist;
 
 use crate::board::{Board, FromBoard};
 use rtcan::robot_toml as msg;
+
+// The gateway forwards exactly the link topics robot.toml declares (`link = "in"|"out"`,
+// numbered by the generator): teleop in; odometry, proximity, battery, log out. A topic
+// declared for the link that the hooks below do not forward fails the build here, and
+// one they forward but robot.toml no longer declares fails at its `msg::link::` constant.
+const _: () = assert!(
+    msg::link::IN_COUNT == 1 && msg::link::OUT_COUNT == 4,
+    "robot.toml declares link topics the gateway firmware does not forward (examples/triskar2/src/io.rs)"
+);
 
 /// PWM period in timer ticks: 72 MHz / 3600 = 20 kHz (above hearing, fine for DC motors).
 const PWM_TOP: u16 = 3600;
@@ -308,7 +317,7 @@ impl GatewayIo {
                     .read_volatile()
             };
             self.read = (self.read + 1) % RX_RING;
-            if let Some((topic::TELEOP, payload)) = self.decoder.push(byte) {
+            if let Some((msg::link::TELEOP, payload)) = self.decoder.push(byte) {
                 match msg::Twist::decode(payload) {
                     Some(t) => {
                         let cmd = Twist {
@@ -358,15 +367,15 @@ impl GatewayHw for GatewayIo {
         })
     }
     fn odometry(&mut self, _now: Nanos, m: &msg::Odometry) {
-        self.send(topic::ODOMETRY, m);
+        self.send(msg::link::ODOMETRY, m);
     }
     fn proximity(&mut self, _now: Nanos, m: &msg::Proximity) {
-        self.send(topic::PROXIMITY, m);
+        self.send(msg::link::PROXIMITY, m);
     }
     fn battery(&mut self, _now: Nanos, m: &msg::Battery) {
-        self.send(topic::BATTERY, m);
+        self.send(msg::link::BATTERY, m);
     }
     fn log(&mut self, _now: Nanos, m: &msg::LogLine) {
-        self.send(topic::LOG, m);
+        self.send(msg::link::LOG, m);
     }
 }

@@ -4,7 +4,8 @@
 //! ```text
 //! COBS( topic  payload[n]  crc_lo crc_hi )  0x00
 //! ```
-//! `topic` is a [`topic`] number, `n` ≤ [`MAX_PAYLOAD`], and the CRC-16/CCITT-FALSE
+//! `topic` is a link topic number (robot.toml `link = "in"|"out"`, numbered 1.. in
+//! file order by rtcan-model: the firmware's `rtcan::robot_toml::link`), `n` ≤ [`MAX_PAYLOAD`], and the CRC-16/CCITT-FALSE
 //! (poly 0x1021, init 0xFFFF) covers `topic` and the payload. COBS leaves no zero byte
 //! inside a frame, so the zero delimiter always marks a frame end: after any lost,
 //! added or changed byte the decoder drops at most the frame it is in and is in step
@@ -13,30 +14,6 @@
 //! cannot tell 0x00 from 0xFF). HAL-free and host-tested.
 #![cfg_attr(not(test), no_std)]
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::indexing_slicing))]
-
-/// Link topic numbers (fixed by this protocol, independent of the bus message IDs
-/// the planner assigns, so the host side does not change when robot.toml does).
-pub mod topic {
-    /// Host → robot: `Twist` velocity command (forwarded as robot.toml `teleop`).
-    pub const TELEOP: u8 = 1;
-    /// Robot → host: `Odometry`.
-    pub const ODOMETRY: u8 = 2;
-    /// Robot → host: `Proximity`.
-    pub const PROXIMITY: u8 = 3;
-    /// Robot → host: `Battery`.
-    pub const BATTERY: u8 = 4;
-    /// Robot → host: `LogLine`.
-    pub const LOG: u8 = 5;
-
-    /// The robot.toml topic each link topic carries.
-    pub const NAMES: [(u8, &str); 5] = [
-        (TELEOP, "teleop"),
-        (ODOMETRY, "odometry"),
-        (PROXIMITY, "proximity"),
-        (BATTERY, "battery"),
-        (LOG, "log"),
-    ];
-}
 
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0x00;
@@ -242,6 +219,14 @@ fn bump(c: &mut u32) {
 
 #[cfg(test)]
 mod tests {
+    /// Link numbers as Triskar2's robot.toml declares them (teleop in; odometry,
+    /// proximity, battery, log out).
+    mod topic {
+        pub const TELEOP: u8 = 1;
+        pub const ODOMETRY: u8 = 2;
+        pub const PROXIMITY: u8 = 3;
+        pub const BATTERY: u8 = 4;
+    }
     use super::*;
 
     fn frames(d: &mut Decoder, bytes: &[u8]) -> Vec<(u8, Vec<u8>)> {
