@@ -117,7 +117,7 @@ impl NodeNames {
 
 /// The GID of the entity whose liveliness token is `token`.
 pub fn gid(token: &str) -> [u8; 16] {
-    twox_hash::xxh3::hash128(token.as_bytes()).to_le_bytes()
+    xxhash_rust::xxh3::xxh3_128(token.as_bytes()).to_le_bytes()
 }
 
 /// The attachment of one sample.
