@@ -14,8 +14,7 @@ use rtcan_bridge::ros2::types::{self, Stamp, STRING_MSG};
 use rtcan_model::bridge_keys::Ros2Type;
 use serde_json::json;
 
-const STRING_HASH: &str =
-    "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18";
+const STRING_HASH: &str = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18";
 
 fn node(domain: u32, zid: &str, ns: &str, name: &str) -> NodeNames {
     NodeNames {
@@ -118,7 +117,10 @@ fn gids_are_xxh3_128_of_the_token_and_ride_in_the_attachment() {
     let mut want = vec![3, 0, 0, 0, 0, 0, 0, 0, 8, 7, 6, 5, 4, 3, 2, 1, 16];
     want.extend_from_slice(&gid);
     assert_eq!(a, want);
-    assert_eq!(rmw::parse_attachment(&a), Some((3, 0x0102_0304_0506_0708, gid)));
+    assert_eq!(
+        rmw::parse_attachment(&a),
+        Some((3, 0x0102_0304_0506_0708, gid))
+    );
     assert_eq!(rmw::parse_attachment(&a[..32]), None);
 }
 
@@ -161,10 +163,14 @@ fn twist_cdr_is_six_float64_after_the_header() {
     assert!(types::decode_twist(&want[..40]).is_err());
     let mut be = want.clone();
     be[1] = 0; // CDR_BE
-    assert!(types::decode_twist(&be).unwrap_err().contains("00 00 00 00"));
+    assert!(types::decode_twist(&be)
+        .unwrap_err()
+        .contains("00 00 00 00"));
     let mut long = want.clone();
     long.extend([0; 8]);
-    assert!(types::decode_twist(&long).unwrap_err().contains("a Twist is 52"));
+    assert!(types::decode_twist(&long)
+        .unwrap_err()
+        .contains("a Twist is 52"));
 }
 
 #[test]

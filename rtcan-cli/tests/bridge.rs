@@ -41,7 +41,7 @@ fn a_zenoh_peer_in_another_process_sees_and_drives_the_simulated_robot() {
     let mut ready = String::new();
     out.read_line(&mut ready).unwrap();
     assert!(
-        ready.starts_with("bridge ready: 9 topics on rtcan/robot/*")
+        ready.starts_with("bridge ready: 9 topics on rtcan/triskar2/*")
             && ready.contains("writable: teleop"),
         "{ready}"
     );
@@ -53,9 +53,12 @@ fn a_zenoh_peer_in_another_process_sees_and_drives_the_simulated_robot() {
     c.insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
         .unwrap();
     let session = zenoh::open(c).wait().unwrap();
-    let sub = session.declare_subscriber("rtcan/robot/**").wait().unwrap();
+    let sub = session
+        .declare_subscriber("rtcan/triskar2/**")
+        .wait()
+        .unwrap();
     let teleop = session
-        .declare_publisher("rtcan/robot/teleop")
+        .declare_publisher("rtcan/triskar2/teleop")
         .wait()
         .unwrap();
 
@@ -76,12 +79,12 @@ fn a_zenoh_peer_in_another_process_sees_and_drives_the_simulated_robot() {
         };
         let v: serde_json::Value = serde_json::from_slice(&s.payload().to_bytes()).unwrap();
         match s.key_expr().as_str() {
-            "rtcan/robot/velocity" => {
+            "rtcan/triskar2/velocity" => {
                 let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
                 assert_eq!(keys, ["vx", "vy", "wz"]);
                 velocity_vx = v["vx"].as_f64().unwrap();
             }
-            "rtcan/robot/odometry" => {
+            "rtcan/triskar2/odometry" => {
                 let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
                 assert_eq!(keys, ["x", "y", "theta", "vx", "vy", "wz"]);
                 odometry_x = v["x"].as_f64().unwrap();
@@ -94,7 +97,7 @@ fn a_zenoh_peer_in_another_process_sees_and_drives_the_simulated_robot() {
             // does not fit teleop's type.
             session
                 .put(
-                    "rtcan/robot/odometry",
+                    "rtcan/triskar2/odometry",
                     r#"{"x":1,"y":0,"theta":0,"vx":0,"vy":0,"wz":0}"#,
                 )
                 .wait()
