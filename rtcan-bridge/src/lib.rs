@@ -46,6 +46,8 @@ pub struct Options {
     pub raw: bool,
     /// Topics accepted from Zenoh.
     pub writable: Vec<String>,
+    /// Topics taken from other robots (WAN of CANs): (local topic, robot, its topic).
+    pub imports: Vec<(String, String, String)>,
 }
 
 /// What a bridge did.
@@ -60,6 +62,8 @@ pub struct Counts {
     /// Samples on writable topics whose value did not fit the type, or that the link
     /// could not send.
     pub bad: u64,
+    /// Messages of other robots published on this bus (`remote` imports).
+    pub imported: u64,
 }
 
 /// Opens a Zenoh peer session on `listen`/`connect` (no multicast scouting: peers are
@@ -90,6 +94,8 @@ pub struct Bridge<'c> {
     cat: &'c Catalog,
     pubs: Vec<Publisher<'static>>,
     commands: Subscriber<FifoChannelHandler<Sample>>,
+    /// One subscriber per import, with its local topic index.
+    imports: Vec<(usize, Subscriber<FifoChannelHandler<Sample>>)>,
     dec: Decoder<'c>,
     opts: Options,
     /// Counts so far.
@@ -117,11 +123,24 @@ impl<'c> Bridge<'c> {
             .allowed_origin(Locality::Remote)
             .wait()
             .map_err(|e| format!("declaring the command subscriber: {e}"))?;
+        let mut imports = Vec::new();
+        for (local, robot, topic) in &opts.imports {
+            let Some(i) = cat.topics.iter().position(|t| t.name == *local) else {
+                return Err(format!("import into `{local}`: not a topic on the bus"));
+            };
+            let sub = session
+                .declare_subscriber(key(robot, topic))
+                .allowed_origin(Locality::Remote)
+                .wait()
+                .map_err(|e| format!("declaring the import of {robot}/{topic}: {e}"))?;
+            imports.push((i, sub));
+        }
         Ok(Bridge {
             _session: session,
             cat,
             pubs,
             commands,
+            imports,
             dec: Decoder::new(cat),
             opts,
             counts: Counts::default(),
@@ -148,8 +167,19 @@ impl<'c> Bridge<'c> {
             ));
             return;
         };
+        match self.value(t, s).and_then(|p| link.publish(&t.name, &p)) {
+            Ok(()) => self.counts.accepted += 1,
+            Err(e) => {
+                self.counts.bad += 1;
+                self.last_error = Some(format!("command on `{k}`: {e}"));
+            }
+        }
+    }
+
+    /// A sample's value as topic `t`'s payload (JSON, or raw with `raw`).
+    fn value(&self, t: &rtcan_sim::decode::TopicDesc, s: &Sample) -> Result<Vec<u8>, String> {
         let bytes = s.payload().to_bytes();
-        let payload = if self.opts.raw {
+        if self.opts.raw {
             if bytes.len() == usize::from(t.size) {
                 Ok(bytes.to_vec())
             } else {
@@ -164,12 +194,27 @@ impl<'c> Bridge<'c> {
             serde_json::from_slice::<serde_json::Value>(&bytes)
                 .map_err(|e| format!("not JSON: {e}"))
                 .and_then(|v| from_json(t, &v))
-        };
-        match payload.and_then(|p| link.publish(&t.name, &p)) {
-            Ok(()) => self.counts.accepted += 1,
-            Err(e) => {
-                self.counts.bad += 1;
-                self.last_error = Some(format!("command on `{k}`: {e}"));
+        }
+    }
+
+    /// Publishes on this bus what the imported robots' topics carried.
+    fn import(&mut self, link: &mut dyn Link) {
+        let mut got = Vec::new();
+        for (i, sub) in &self.imports {
+            while let Ok(Some(s)) = sub.try_recv() {
+                got.push((*i, s));
+            }
+        }
+        for (i, s) in got {
+            let Some(t) = self.cat.topics.get(i) else {
+                continue;
+            };
+            match self.value(t, &s).and_then(|p| link.publish(&t.name, &p)) {
+                Ok(()) => self.counts.imported += 1,
+                Err(e) => {
+                    self.counts.bad += 1;
+                    self.last_error = Some(format!("import on `{}`: {e}", s.key_expr()));
+                }
             }
         }
     }
@@ -180,6 +225,7 @@ impl<'c> Bridge<'c> {
         while let Ok(Some(s)) = self.commands.try_recv() {
             self.command(&s, link);
         }
+        self.import(link);
         let Some(batch) = link.recv()? else {
             return Ok(false);
         };

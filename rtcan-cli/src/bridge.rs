@@ -154,6 +154,10 @@ fn bridge(
         Source::Sim(_) | Source::Serial(_) => plan.bridge.writable(),
         _ => Vec::new(),
     };
+    // WAN of CANs: topics robot.toml takes from other robots' bridges.
+    if !opts.writable.is_empty() && ros2.is_none() {
+        opts.imports = plan.bridge.imports();
+    }
     let mut link = la.open(&plan)?;
     let writable = if opts.writable.is_empty() {
         "none".to_string()
@@ -170,6 +174,9 @@ fn bridge(
                 opts.listen,
                 opts.connect,
             );
+            for (local, robot, topic) in &opts.imports {
+                println!("  {local} <- {}", key(robot, topic));
+            }
             Any::Zenoh(Box::new(b))
         }
         Some(domain) => {
@@ -202,6 +209,9 @@ fn bridge(
         "bridged {} messages; commands: {} accepted, {} refused (not writable), {} bad",
         c.published, c.accepted, c.refused, c.bad
     );
+    if !opts.imports.is_empty() {
+        println!("imported {} messages from other robots", c.imported);
+    }
     if let Some(e) = last {
         println!("last refusal: {e}");
     }

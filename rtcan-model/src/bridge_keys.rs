@@ -3,7 +3,9 @@
 //! file stem), and per topic `writable = true` (commands from Zenoh or the host accepted),
 //! `link = "in" | "out"` (what the gateway forwards over its serial link; link topic
 //! numbers are generated from this, 1.. in file order) and `ros2 = "pkg/msg/Type"` (the
-//! standard ROS 2 type `rtcan bridge --ros2` maps the topic to). Checked with the rest of
+//! standard ROS 2 type `rtcan bridge --ros2` maps the topic to) and `remote =
+//! "<robot>/<topic>"` (a WAN of CANs, paper 003: the bridge also takes this topic from
+//! another robot's bridge, key `rtcan/<robot>/<topic>`). Checked with the rest of
 //! robot.toml (`analyze`): every error has a span and a hint.
 use crate::diag::{Code, Diagnostic};
 use crate::model::{FieldType, Model, Prim};
@@ -83,6 +85,8 @@ pub struct TopicBridge {
     pub link: Option<LinkDir>,
     /// The ROS 2 type `--ros2` maps it to.
     pub ros2: Option<Ros2Type>,
+    /// Taken also from another robot: (robot, topic) of `remote = "robot/topic"`.
+    pub remote: Option<(String, String)>,
 }
 
 /// A topic on the gateway's serial link.
@@ -120,6 +124,16 @@ impl BridgeDecl {
             .iter()
             .filter(|t| t.writable)
             .map(|t| t.name.clone())
+            .collect()
+    }
+    /// (local topic, remote robot, remote topic) of every `remote` import.
+    pub fn imports(&self) -> Vec<(String, String, String)> {
+        self.topics
+            .iter()
+            .filter_map(|t| {
+                let (r, n) = t.remote.clone()?;
+                Some((t.name.clone(), r, n))
+            })
             .collect()
     }
     /// The link topic of `name`.
@@ -241,8 +255,25 @@ pub fn validate(
                     )),
                 },
                 "ros2" => tb.ros2 = ros2_key(e, &what, model, t, items),
+                "remote" => tb.remote = remote_key(e, &what, items),
                 _ => {}
             }
+        }
+        if let (Some(_), false, Some(e)) = (
+            &tb.remote,
+            tb.writable,
+            keys.iter().find(|e| e.key == "remote"),
+        ) {
+            items.push(
+                Diagnostic::new(
+                    Code::BadValue,
+                    e.key_span.clone(),
+                    format!("{what} takes messages from another robot but is not writable"),
+                )
+                .help(
+                    "add `writable = true`: the bridge publishes imported messages like commands",
+                ),
+            );
         }
         if let (Some(dir), Some(e)) = (tb.link, keys.iter().find(|e| e.key == "link")) {
             let size = model.topic_size(t);
@@ -313,6 +344,43 @@ fn robot_table(r: &Entry, decl: &mut BridgeDecl, items: &mut Vec<Diagnostic>) {
                 format!("`[robot] name` must be a string, found {}", other.type_name()),
                 "e.g. `name = \"triskar2\"`",
             )),
+        }
+    }
+}
+
+/// Whether `name` can be a topic name in a key (`a`..`z`, digits, `_`, letter first).
+fn valid_topic_name(name: &str) -> bool {
+    let mut c = name.chars();
+    c.next().is_some_and(|c| c.is_ascii_lowercase())
+        && c.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+}
+
+fn remote_key(e: &Entry, what: &str, items: &mut Vec<Diagnostic>) -> Option<(String, String)> {
+    let help = "write `remote = \"<robot>/<topic>\"`, e.g. \"triskar2/velocity\"";
+    let Kind::Str(s) = &e.value.kind else {
+        items.push(bad(
+            e,
+            Code::WrongType,
+            format!(
+                "{what} `remote` must be a string, found {}",
+                e.value.kind.type_name()
+            ),
+            help,
+        ));
+        return None;
+    };
+    match s.split_once('/') {
+        Some((r, t)) if valid_robot_name(r) && valid_topic_name(t) => {
+            Some((r.to_string(), t.to_string()))
+        }
+        _ => {
+            items.push(bad(
+                e,
+                Code::BadValue,
+                format!("{what} `remote` is \"{s}\": not `<robot>/<topic>`"),
+                help,
+            ));
+            None
         }
     }
 }

@@ -45,6 +45,7 @@ const TOPIC_KEYS: &[&str] = &[
     "writable",
     "link",
     "ros2",
+    "remote",
 ];
 const SUB_KEYS: &[&str] = &["node", "queue"];
 

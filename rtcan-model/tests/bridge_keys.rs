@@ -194,3 +194,48 @@ fn a_link_topic_larger_than_a_link_frame_is_refused() {
         "{out}"
     );
 }
+
+#[test]
+fn remote_imports_name_a_robot_and_topic_and_need_writable() {
+    let src = robot().replace(
+        "writable = true         # the host / Zenoh / ROS 2 may command it\n",
+        "writable = true\nremote = \"leader/velocity\"\n",
+    );
+    let plan = Robot::parse("robot.toml", &src).unwrap();
+    assert_eq!(
+        plan.bridge.imports(),
+        [(
+            "teleop".to_string(),
+            "leader".to_string(),
+            "velocity".to_string()
+        )]
+    );
+    for (line, want) in [
+        (
+            "remote = \"leader\"",
+            "error[bad-value]: topic `teleop` `remote` is \"leader\": not `<robot>/<topic>`",
+        ),
+        ("remote = \"lead/er/velocity\"", "not `<robot>/<topic>`"),
+        (
+            "remote = 1",
+            "error[wrong-type]: topic `teleop` `remote` must be a string",
+        ),
+    ] {
+        let src = robot().replace(
+            "writable = true         # the host / Zenoh / ROS 2 may command it\n",
+            &format!("writable = true\n{line}\n"),
+        );
+        let out = errors(&src);
+        assert!(out.contains(want), "want `{want}` in\n{out}");
+    }
+    let src = robot().replace(
+        "writable = true         # the host / Zenoh / ROS 2 may command it\n",
+        "remote = \"leader/velocity\"\n",
+    );
+    let out = errors(&src);
+    assert!(
+        out.contains("error[bad-value]: topic `teleop` takes messages from another robot but is not writable")
+            && out.contains("help: add `writable = true`"),
+        "{out}"
+    );
+}
