@@ -11,7 +11,12 @@
 //!    (robots/triskar2_follower.toml, `teleop` `remote = "triskar2/velocity"`) publishing
 //!    it on the follower's link;
 //! 4. throughput of one bridge through the router (the recording 5 times back to back).
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::unnecessary_to_owned
+)]
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;

@@ -94,8 +94,11 @@ impl<'a> Reader<'a> {
         match buf.get(..4) {
             Some(h) if h == HEADER_LE => Ok(Reader { buf, at: 4 }),
             Some(h) => Err(format!(
-                "CDR encapsulation {:02x} {:02x} {:02x} {:02x}: only 00 01 00 00 (little-endian plain CDR) is read",
-                h[0], h[1], h[2], h[3]
+                "CDR encapsulation {}: only 00 01 00 00 (little-endian plain CDR) is read",
+                h.iter()
+                    .map(|b| format!("{b:02x}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
             )),
             None => Err(format!("{} bytes: shorter than the CDR header", buf.len())),
         }
