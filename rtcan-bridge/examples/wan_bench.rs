@@ -195,7 +195,11 @@ fn main() {
         };
         let mut follower = Bridge::new(&fcat, fopts).unwrap();
         std::thread::sleep(Duration::from_millis(500));
-        let velocity = cat.topics.iter().position(|t| t.name == "velocity").unwrap();
+        let velocity = cat
+            .topics
+            .iter()
+            .position(|t| t.name == "velocity")
+            .unwrap();
         let mut flink = VecLink::new(&[]);
         flink.endless = true;
         let mut lat = Vec::new();
