@@ -50,3 +50,46 @@ pub fn link(plan: &Plan) -> TokenStream {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan(src: &str) -> Plan {
+        rtcan_model::Robot::parse("robot.toml", src).unwrap()
+    }
+
+    fn robot() -> String {
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml")).unwrap()
+    }
+
+    #[test]
+    fn triskar2_link_numbers_and_table_come_from_robot_toml() {
+        let code = link(&plan(&robot())).to_string();
+        for want in [
+            "pub const TELEOP : u8 = 1 ;",
+            "pub const ODOMETRY : u8 = 2 ;",
+            "pub const PROXIMITY : u8 = 3 ;",
+            "pub const BATTERY : u8 = 4 ;",
+            "pub const LOG : u8 = 5 ;",
+            "pub const TOPICS : [(u8 , & str , usize , bool) ; 5] = [(1 , \"teleop\" , 12 , true) , (2 , \"odometry\" , 24 , false) , (3 , \"proximity\" , 8 , false) , (4 , \"battery\" , 5 , false) , (5 , \"log\" , 32 , false)] ;",
+            "pub const IN_COUNT : usize = 1 ;",
+            "pub const OUT_COUNT : usize = 4 ;",
+        ] {
+            assert!(code.contains(want), "`{want}` not in {code}");
+        }
+        assert!(!code.contains("ENCODER1"));
+    }
+
+    #[test]
+    fn a_robot_without_link_topics_gets_an_empty_table() {
+        let src: String = robot()
+            .lines()
+            .filter(|l| !l.starts_with("link"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let code = link(&plan(&src)).to_string();
+        assert!(code.contains("pub const TOPICS : [(u8 , & str , usize , bool) ; 0] = [] ;"), "{code}");
+        assert!(code.contains("pub const OUT_COUNT : usize = 0 ;"));
+    }
+}
