@@ -1,5 +1,5 @@
 //! A plain Zenoh subscriber for trying the bridge by hand (docs/BRIDGE.md):
-//! `cargo run -p rtcan-bridge --example zsub -- tcp/127.0.0.1:7447 'rtcan/robot/**' 5`
+//! `cargo run -p rtcan-bridge --example zsub -- tcp/127.0.0.1:7447 'rtcan/triskar2/**' 5`
 //! prints the first N samples as `key payload`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
