@@ -89,7 +89,10 @@ mod tests {
             .map(|l| format!("{l}\n"))
             .collect();
         let code = link(&plan(&src)).to_string();
-        assert!(code.contains("pub const TOPICS : [(u8 , & str , usize , bool) ; 0] = [] ;"), "{code}");
+        assert!(
+            code.contains("pub const TOPICS : [(u8 , & str , usize , bool) ; 0] = [] ;"),
+            "{code}"
+        );
         assert!(code.contains("pub const OUT_COUNT : usize = 0 ;"));
     }
 }
