@@ -7,7 +7,8 @@ use quote::quote;
 use rtcan_model::bridge_keys::LinkDir;
 use rtcan_model::Plan;
 
-/// `pub mod link { pub const NAME: u8 = n; pub const TOPICS: [LinkTopic; N] = ...; }`.
+/// `pub mod link { pub mod number { pub const NAME: u8 = n; } pub const TOPICS: ...; }`
+/// (the numbers in their own module: a topic named `topics` or `in_count` cannot clash).
 pub fn link(plan: &Plan) -> TokenStream {
     let topics = &plan.bridge.link;
     let consts = topics.iter().map(|l| {
@@ -40,7 +41,10 @@ pub fn link(plan: &Plan) -> TokenStream {
     quote! {
         /// The gateway's serial link topics (robot.toml `link`).
         pub mod link {
-            #(#consts)*
+            /// Link topic number of each link topic.
+            pub mod number {
+                #(#consts)*
+            }
             /// Every link topic: (number, topic name, payload bytes, host → robot).
             pub const TOPICS: [(u8, &str, usize, bool); #count] = [#(#rows),*];
             /// How many link topics go host → robot.
@@ -79,6 +83,8 @@ mod tests {
             assert!(code.contains(want), "`{want}` not in {code}");
         }
         assert!(!code.contains("ENCODER1"));
+        // The numbers live in their own module (no clash with TOPICS / IN_COUNT).
+        assert!(code.contains("pub mod number {"), "{code}");
     }
 
     #[test]

@@ -28,7 +28,8 @@ use rtcan::robot_toml as msg;
 // The gateway forwards exactly the link topics robot.toml declares (`link = "in"|"out"`,
 // numbered by the generator): teleop in; odometry, proximity, battery, log out. A topic
 // declared for the link that the hooks below do not forward fails the build here, and
-// one they forward but robot.toml no longer declares fails at its `msg::link::` constant.
+// one they forward but robot.toml no longer declares fails at its `msg::link::number::`
+// constant.
 const _: () = assert!(
     msg::link::IN_COUNT == 1 && msg::link::OUT_COUNT == 4,
     "robot.toml declares link topics the gateway firmware does not forward (examples/triskar2/src/io.rs)"
@@ -317,7 +318,7 @@ impl GatewayIo {
                     .read_volatile()
             };
             self.read = (self.read + 1) % RX_RING;
-            if let Some((msg::link::TELEOP, payload)) = self.decoder.push(byte) {
+            if let Some((msg::link::number::TELEOP, payload)) = self.decoder.push(byte) {
                 match msg::Twist::decode(payload) {
                     Some(t) => {
                         let cmd = Twist {
@@ -367,15 +368,15 @@ impl GatewayHw for GatewayIo {
         })
     }
     fn odometry(&mut self, _now: Nanos, m: &msg::Odometry) {
-        self.send(msg::link::ODOMETRY, m);
+        self.send(msg::link::number::ODOMETRY, m);
     }
     fn proximity(&mut self, _now: Nanos, m: &msg::Proximity) {
-        self.send(msg::link::PROXIMITY, m);
+        self.send(msg::link::number::PROXIMITY, m);
     }
     fn battery(&mut self, _now: Nanos, m: &msg::Battery) {
-        self.send(msg::link::BATTERY, m);
+        self.send(msg::link::number::BATTERY, m);
     }
     fn log(&mut self, _now: Nanos, m: &msg::LogLine) {
-        self.send(msg::link::LOG, m);
+        self.send(msg::link::number::LOG, m);
     }
 }
