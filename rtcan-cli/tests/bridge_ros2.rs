@@ -247,3 +247,32 @@ fn a_ros2_node_on_rmw_zenoh_sees_and_drives_the_simulated_robot() {
         .unwrap();
     assert!(accepted >= 1, "{report}");
 }
+
+#[test]
+fn ros2_usage_errors_exit_2() {
+    for (args, want) in [
+        (&["--domain-id", "3"][..], "--domain-id needs --ros2"),
+        (
+            &["--ros2", "--raw"][..],
+            "--raw and --ros2 exclude each other",
+        ),
+        (
+            &["--ros2", "--domain-id", "233"][..],
+            "domain id `233`: expected 0..=232",
+        ),
+        (
+            &["--ros2", "--domain-id", "x"][..],
+            "domain id `x`: expected 0..=232",
+        ),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
+            .arg("bridge")
+            .args(args)
+            .current_dir(root())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+}
