@@ -40,7 +40,7 @@ fn type_hashes_are_the_published_ones() {
         h(Ros2Type::Odometry),
         "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0"
     );
-    // Range with `variance` (Jazzy and later): a published key shows `RIHS01_b42b6256...`.
+    // Range with `variance`: a published key shows `RIHS01_b42b6256...`.
     assert_eq!(
         h(Ros2Type::Range),
         "RIHS01_b42b62562e93cbfe9d42b82fe5994dfa3d63d7d5c90a317981703f7388adff3a"

@@ -143,6 +143,12 @@ fn bridge(
 ) -> Result<(), String> {
     let (plan, cat) = la.robot()?;
     opts.robot = name.unwrap_or_else(|| plan.bridge.robot.clone());
+    if ros2.is_some() && !rtcan_model::bridge_keys::valid_robot_name(&opts.robot) {
+        return Err(format!(
+            "robot name `{}` cannot be a ROS 2 namespace (an ASCII letter, then letters, digits and single `_`)",
+            opts.robot
+        ));
+    }
     if opts.robot.is_empty() || opts.robot.contains(['/', '*', '$', '?', '#']) {
         return Err(format!(
             "robot name `{}` cannot be a Zenoh key chunk (give --robot-name)",

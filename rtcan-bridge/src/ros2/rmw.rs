@@ -1,6 +1,6 @@
 //! rmw_zenoh's names on Zenoh, as its docs/design.md describes them (ros2/rmw_zenoh,
-//! design.md at commit 99a6a2bd10b949052f4f12c5854825dc005e95a5, the zenoh 1.x format of
-//! ROS 2 Jazzy and later; sections "Topic and Service name mapping to Zenoh key
+//! design.md at commit 99a6a2bd10b949052f4f12c5854825dc005e95a5, rmw_zenoh on zenoh 1.x;
+//! sections "Topic and Service name mapping to Zenoh key
 //! expressions", "Graph Cache" and "Publishers"):
 //! - data: `<domain_id>/<fully_qualified_name without the leading />/<type_name>/<type_hash>`;
 //! - liveliness tokens: `@ros2_lv/<domain_id>/<session_id>/<node_id>/<entity_id>/<kind>/

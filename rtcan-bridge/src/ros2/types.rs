@@ -138,7 +138,7 @@ const ODOMETRY: TypeDesc = TypeDesc {
         nested("twist", "geometry_msgs/msg/TwistWithCovariance"),
     ],
 };
-/// sensor_msgs/msg/Range as of ROS 2 Jazzy and later (with `variance`).
+/// sensor_msgs/msg/Range with its `variance` field (the current common_interfaces).
 const RANGE: TypeDesc = TypeDesc {
     name: "sensor_msgs/msg/Range",
     fields: &[
