@@ -488,6 +488,7 @@ fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
         if names::RESERVED_MODULE_NAMES.contains(&m.key.as_str()) {
             let what = match m.key.as_str() {
                 "topics" => "the generated module holding the topic constants",
+                "link" => "the generated module holding the serial link's topic numbers",
                 "rtcan" => "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
                 _ => "a primitive type the generated message structs use",
             };

@@ -239,3 +239,15 @@ fn remote_imports_name_a_robot_and_topic_and_need_writable() {
         "{out}"
     );
 }
+
+#[test]
+fn a_module_named_link_collides_with_the_generated_link_numbers() {
+    let src = robot()
+        .replace("[modules.psu]", "[modules.link]")
+        .replace("module = \"psu\"", "module = \"link\"");
+    let out = errors(&src);
+    assert!(
+        out.contains("error[name-collision]: module name `link` collides with the generated module holding the serial link's topic numbers"),
+        "{out}"
+    );
+}
