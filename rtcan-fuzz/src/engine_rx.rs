@@ -100,7 +100,10 @@ impl Controller for RecCan {
             for (i, b) in frame.data().iter().enumerate() {
                 mask |= u64::from(*b) << (8 * i);
             }
-            assert_eq!(usize::from(frame.dlc()), usize::from(self.slots).div_ceil(8));
+            assert_eq!(
+                usize::from(frame.dlc()),
+                usize::from(self.slots).div_ceil(8)
+            );
             assert_eq!(mask & 1, 1, "sync without slot 0 reserved");
             if self.slots < 64 {
                 assert_eq!(mask >> self.slots, 0, "sync mask beyond the cycle");
@@ -437,12 +440,20 @@ fn sync(input: &mut Bytes<'_>, slots: u8) -> Frame {
 fn heartbeat(input: &mut Bytes<'_>) -> Frame {
     let module = u32::from(input.u8() % 64);
     let how = input.u8();
-    let fp = if how & 1 == 0 { FINGERPRINT } else { input.u32() };
+    let fp = if how & 1 == 0 {
+        FINGERPRINT
+    } else {
+        input.u32()
+    };
     let state = input.u8();
     let (laxity, field, dlc) = if how & 2 == 0 {
         (63, 0, 5)
     } else {
-        (u32::from(input.u8() % 64), u32::from(input.u8() & 0x7F), input.u8() % 9)
+        (
+            u32::from(input.u8() % 64),
+            u32::from(input.u8() & 0x7F),
+            input.u8() % 9,
+        )
     };
     let [a, b, c, d] = fp.to_le_bytes();
     make(

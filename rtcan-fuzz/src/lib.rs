@@ -17,8 +17,11 @@ pub mod engine_rx;
 pub mod oracle;
 pub mod robot_toml;
 
+/// A harness: one fuzz input in, a panic on a finding.
+pub type Harness = fn(&[u8]);
+
 /// The fuzz targets by name (directory names under `fuzz/corpus/` and `fuzz/artifacts/`).
-pub const TARGETS: [(&str, fn(&[u8])); 3] = [
+pub const TARGETS: [(&str, Harness); 3] = [
     ("robot_toml", robot_toml::run),
     ("engine_rx", engine_rx::run),
     ("candump", candump::run),

@@ -281,7 +281,10 @@ mod tests {
         o.frame(0x0000_A016, &payload[0..8], 400);
         o.frame(0x0000_A015, &payload[8..16], 500);
         o.frame(0x0000_A019, &payload[8..16], 600); // transfer 6, counter 1
-        assert_eq!(o.counts.other_transfer, 0, "counter 1 is not expected any more");
+        assert_eq!(
+            o.counts.other_transfer, 0,
+            "counter 1 is not expected any more"
+        );
         assert_eq!(o.counts.out_of_order, 1);
         o.frame(0x0000_A016, &payload[0..8], 700);
         o.frame(0x0000_A019, &payload[8..16], 800);
@@ -324,7 +327,10 @@ mod tests {
         assert_eq!(o.counts.bad_dlc, 1);
         o.frame(id(5, 0x141, 4 << 1 | 1), &[2; 8], 13);
         o.frame(id(5, 0x141, 4 << 1), &[3], 14);
-        assert_eq!(o.deliveries.last(), Some(&(1, vec![2, 2, 2, 2, 2, 2, 2, 2, 3], 13)));
+        assert_eq!(
+            o.deliveries.last(),
+            Some(&(1, vec![2, 2, 2, 2, 2, 2, 2, 2, 3], 13))
+        );
         o.frame(id(0, 0x142, 0), &[0; 8], 20);
         assert_eq!(o.counts.bad_size, 1);
         o.frame(id(1, 0x200, 0), &[], 21);

@@ -44,8 +44,14 @@ pub fn run(data: &[u8]) {
     );
     for (i, m) in plan.modules.iter().enumerate() {
         let tables = plan.tables(i).expect("every module of a plan has tables");
-        let fit = rtcan_core::engine::check_tables(&tables.view(), tables.rx.len(), m.rx_arena_bytes);
-        assert_eq!(fit, Ok(()), "module `{}`: generated tables rejected", m.name);
+        let fit =
+            rtcan_core::engine::check_tables(&tables.view(), tables.rx.len(), m.rx_arena_bytes);
+        assert_eq!(
+            fit,
+            Ok(()),
+            "module `{}`: generated tables rejected",
+            m.name
+        );
     }
 }
 

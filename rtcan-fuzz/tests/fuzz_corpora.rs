@@ -1,3 +1,4 @@
+#![allow(clippy::unwrap_used)]
 //! Replays every committed corpus file and crash artifact of the fuzz targets
 //! (`fuzz/corpus/<target>/`, `fuzz/artifacts/<target>/`) through the same harness
 //! functions the cargo-fuzz targets call: a regression of any past finding, or of any
