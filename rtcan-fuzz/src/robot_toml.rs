@@ -1,6 +1,6 @@
 //! `robot_toml`: bytes → `rtcan_model::analyze` (parse, validate, plan, timing check) →
 //! reports → `rtcan_codegen::generate`. Never a panic or a hang (libFuzzer's `-timeout`
-//! catches the latter); every diagnostic span lies inside the input on character
+//! catches the latter); every diagnostic has a span, inside the input on character
 //! boundaries; the status agrees with what was produced; and what `check` admits
 //! generates code without `compile_error!` whose tables pass the engine's
 //! `check_tables` with the generated sizes (the const assertion of the generated code).
@@ -13,6 +13,11 @@ pub fn run(data: &[u8]) {
     let text = String::from_utf8_lossy(data);
     let a = analyze("fuzz.toml", &text);
     assert_spans_inside(&text, &a.diagnostics.items);
+    // Rendered rustc-style, every error of `analyze` points into the file (`file:line:col`);
+    // only reading the file (`io`, `file-too-large`) has nothing to point at.
+    for d in &a.diagnostics.items {
+        assert!(d.span.is_some(), "{:?} without a span: {}", d.code, d.message);
+    }
     let status = a.status();
     assert_eq!(
         status == Status::Admissible,
