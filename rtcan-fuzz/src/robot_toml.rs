@@ -16,7 +16,12 @@ pub fn run(data: &[u8]) {
     // Rendered rustc-style, every error of `analyze` points into the file (`file:line:col`);
     // only reading the file (`io`, `file-too-large`) has nothing to point at.
     for d in &a.diagnostics.items {
-        assert!(d.span.is_some(), "{:?} without a span: {}", d.code, d.message);
+        assert!(
+            d.span.is_some(),
+            "{:?} without a span: {}",
+            d.code,
+            d.message
+        );
     }
     let status = a.status();
     assert_eq!(
