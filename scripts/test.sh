@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --qemu
 
-echo "== host tests (cargo test --workspace; rtcan-emu after the images are built)"
+echo "== host tests (cargo test --workspace, with rtcan-fuzz replaying the fuzz corpora on stable; rtcan-emu after the images are built)"
 cargo test --workspace --exclude rtcan-emu
 
 echo "== simulator on the modelled CPU: issue 10's before/after table (docs/SIM.md)"
