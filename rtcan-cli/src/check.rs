@@ -76,6 +76,17 @@ pub fn run(args: &[String]) -> i32 {
         out::println(&compat::json_text(&analysis, changes.as_deref()));
     } else if let Some(plan) = &analysis.plan {
         out::print(&report::text(plan));
+        for c in &plan.chains {
+            out::println(&format!(
+                "chain {}: bound {} budget {}",
+                c.name,
+                c.bound_ns.map_or("unbounded".to_string(), |b| format!(
+                    "{:.3} ms",
+                    b as f64 / 1e6
+                )),
+                format_args!("{:.3} ms", c.budget_ns as f64 / 1e6)
+            ));
+        }
         if !plan.moves.is_empty() {
             out::print(&lock::text(&plan.moves));
         }

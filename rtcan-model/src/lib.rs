@@ -14,6 +14,7 @@
     )
 )]
 
+pub mod chains;
 pub mod compat;
 pub mod costs;
 pub mod diag;
@@ -143,8 +144,11 @@ pub fn analyze_locked(file: &str, source: &str, lock: Option<(&str, &str)>) -> A
             }
             if let Some(m) = &model {
                 plan = plan::build_locked(m, file, lock.as_ref(), &mut items);
-                if let Some(p) = &plan {
+                if let Some(p) = &mut plan {
                     timing::check(m, p, &mut items);
+                    if let syntax::Kind::Table(entries) = &root.kind {
+                        p.chains = chains::check(entries, m, p, &mut items);
+                    }
                 }
             }
             if !items.is_empty() {

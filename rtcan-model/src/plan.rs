@@ -195,6 +195,8 @@ pub struct Plan {
     pub lineage: Option<u32>,
     /// What the lock held that this plan had to move, with reasons.
     pub moves: Vec<crate::lock::Move>,
+    /// End-to-end chains with their bounds (`[chains]`; filled by `analyze`).
+    pub chains: Vec<crate::chains::ChainBound>,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -707,6 +709,7 @@ pub fn build_locked(
         fingerprint: 0,
         lineage: lock.map(|l| l.lineage),
         moves,
+        chains: Vec::new(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)
