@@ -154,7 +154,10 @@ pub fn parse(file: &str, text: &str) -> Result<Lock, Diagnostic> {
                 lock.modules.insert(word(1).to_string(), i);
             }
             ("topic", 4..=6) => {
-                let msg_id = num(2, 0xFFFF).ok_or_else(|| bad("bad message ID"))? as u16;
+                let msg_id = num(2, 0xFFFF)
+                    .filter(|v| *v >= u64::from(FIRST_TOPIC_MSG_ID))
+                    .ok_or_else(|| bad("bad message ID (topics use 0x0140..=0xffff)"))?
+                    as u16;
                 let mut t = LockedTopic {
                     name: word(1).to_string(),
                     msg_id,
@@ -180,8 +183,12 @@ pub fn parse(file: &str, text: &str) -> Result<Lock, Diagnostic> {
                 }
             }
             ("retired", 2) => {
-                lock.retired
-                    .insert(num(1, 0xFFFF).ok_or_else(|| bad("bad message ID"))? as u16);
+                lock.retired.insert(
+                    num(1, 0xFFFF)
+                        .filter(|v| *v >= u64::from(FIRST_TOPIC_MSG_ID))
+                        .ok_or_else(|| bad("bad message ID (topics use 0x0140..=0xffff)"))?
+                        as u16,
+                );
             }
             ("bank", 5) => {
                 let a = num(3, 0x1FFF_FFFF).ok_or_else(|| bad("bad identifier"))? as u32;

@@ -294,6 +294,12 @@ fn a_bad_lock_is_an_error_with_file_line_col() {
         d.message
     );
     assert!(!d.help.is_empty());
+    // A topic ID in the sync/heartbeat range is refused (found by damaged_locks_never_panic).
+    let low = text.replacen("topic teleop 0x0148", "topic teleop 0x0048", 1);
+    let a = analyze_locked("robot.toml", TRISKAR, Some(("robot.lock", &low)));
+    assert!(a.diagnostics.items[0]
+        .message
+        .contains("bad message ID (topics use 0x0140..=0xffff)"));
     for junk in [
         "",
         "version 2\n",
@@ -306,5 +312,87 @@ fn a_bad_lock_is_an_error_with_file_line_col() {
             "lock-invalid",
             "{junk:?}"
         );
+    }
+}
+
+/// Every single-line deletion or number change of a valid lock either plans (keeping what
+/// still fits, reporting the rest) or is refused with a diagnostic; it never panics, and a
+/// plan made with a damaged lock is still a valid robot (same checks as without a lock).
+#[test]
+fn damaged_locks_never_panic() {
+    let (_, text) = base();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut variants = Vec::new();
+    for i in 0..lines.len() {
+        let mut v = lines.clone();
+        v.remove(i);
+        variants.push(v.join("\n"));
+        for (from, to) in [
+            ("0x01", "0x00"),
+            ("phase=", "phase=9"),
+            ("period=", "period=1"),
+            ("0x0000", "0xffff"),
+        ] {
+            let mut v = lines.clone();
+            let changed = v[i].replacen(from, to, 1);
+            v[i] = &changed;
+            variants.push(v.join("\n"));
+        }
+    }
+    variants.push("version 1\nbank gateway mask 0 0\nbank motor1 mask 0 0\n".into());
+    variants.push("version 1\ntopic teleop 0x0140 x\ntopic velocity 0x0140 y\n".into());
+    let mut planned = 0;
+    for v in &variants {
+        let a = analyze_locked("robot.toml", TRISKAR, Some(("robot.lock", v)));
+        match &a.plan {
+            Some(p) => {
+                planned += 1;
+                // IDs stay unique and every module's banks pass exactly what it receives.
+                let mut ids: Vec<u16> = p.topics.iter().map(|t| t.msg_id.0).collect();
+                ids.sort_unstable();
+                ids.dedup();
+                assert_eq!(ids.len(), p.topics.len(), "{v}");
+                assert_filters_exact(p);
+            }
+            None => assert!(!a.diagnostics.is_empty(), "{v}"),
+        }
+    }
+    assert!(
+        planned > variants.len() / 2,
+        "{planned} of {}",
+        variants.len()
+    );
+}
+
+fn assert_filters_exact(p: &Plan) {
+    use rtcan_core::Class;
+    use rtcan_model::filters::{fixed_id, WireTopic};
+    for (mi, m) in p.modules.iter().enumerate() {
+        for (ti, t) in p.topics.iter().enumerate().filter(|(_, t)| t.on_bus) {
+            let w = WireTopic {
+                topic: ti,
+                msg_id: t.msg_id.0,
+                fixed_id: match (t.class, t.fragments) {
+                    (Class::Hrt, 1) => Some(fixed_id(rtcan_core::id::LAXITY_HRT, t.msg_id.0)),
+                    (Class::Nrt, 1) => Some(fixed_id(rtcan_core::id::LAXITY_NRT, t.msg_id.0)),
+                    _ => None,
+                },
+            };
+            if m.rx.contains(&ti) {
+                assert!(
+                    m.banks.iter().any(|b| lock::always_passes(&b.filter, &w)),
+                    "{} {}",
+                    m.name,
+                    t.name
+                );
+            } else if t.module != mi {
+                assert!(
+                    !m.banks.iter().any(|b| lock::may_pass(&b.filter, &w)),
+                    "{} {}",
+                    m.name,
+                    t.name
+                );
+            }
+        }
     }
 }
