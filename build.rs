@@ -29,14 +29,12 @@ fn main() {
     };
     println!("cargo::rerun-if-changed={}", path.display());
     // The same reading rules as `rtcan check` and `rtcan::robot!` (UTF-8, 16 MiB cap).
-    let analysis = match rtcan_model::read_source(&path, &shown) {
-        Ok(source) => rtcan_model::analyze(&shown, &source),
-        Err(diagnostics) => rtcan_model::Analysis {
-            model: None,
-            plan: None,
-            diagnostics,
-        },
-    };
+    // With its robot.lock when there is one (stable allocation, docs/ROBOT_TOML.md).
+    println!(
+        "cargo::rerun-if-changed={}",
+        rtcan_model::lock::path_for(&path).display()
+    );
+    let analysis = rtcan_model::read_analysis(&path, &shown);
     let plan = match analysis.plan {
         Some(p) if analysis.diagnostics.is_empty() => p,
         _ => {

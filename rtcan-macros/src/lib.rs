@@ -84,14 +84,8 @@ fn expand(input: &Input, caller: Option<PathBuf>) -> proc_macro2::TokenStream {
     let rel = input.file.value();
     let abs = resolve(&rel, caller);
     // Diagnostics name the file as written, so messages are the same on every machine.
-    let analysis = match rtcan_model::read_source(&abs, &rel) {
-        Ok(source) => rtcan_model::analyze(&rel, &source),
-        Err(diagnostics) => rtcan_model::Analysis {
-            model: None,
-            plan: None,
-            diagnostics,
-        },
-    };
+    // With its robot.lock, like build.rs and the CLI (stable allocation).
+    let analysis = rtcan_model::read_analysis(&abs, &rel);
     let plan = match analysis.plan {
         Some(p) if analysis.diagnostics.is_empty() => p,
         _ => {

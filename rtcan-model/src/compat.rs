@@ -165,6 +165,10 @@ pub fn text(changes: &[ImageChange]) -> String {
 /// `check --json` output with `images_to_change` added when `--against` was given.
 pub fn json_text(a: &crate::Analysis, changes: Option<&[ImageChange]>) -> String {
     let mut v = crate::report::json(a);
+    if let (Some(p), Some(obj)) = (&a.plan, v.as_object_mut()) {
+        obj.insert("moves".to_string(), crate::lock::json(&p.moves));
+        obj.insert("chains".to_string(), crate::chains::json(&p.chains));
+    }
     if let (Some(c), Some(obj)) = (changes, v.as_object_mut()) {
         obj.insert("images_to_change".to_string(), json(c));
     }

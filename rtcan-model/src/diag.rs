@@ -91,6 +91,10 @@ codes! {
     QueueZero = "queue-zero", Input;
     /// A module needs more CAN filter banks than its board has.
     FilterBanksExhausted = "filter-banks-exhausted", Input;
+    /// robot.lock is malformed (it is generated: restore it or delete it).
+    LockInvalid = "lock-invalid", Input;
+    /// An end-to-end chain's worst-case latency bound exceeds its budget, or it has none.
+    ChainOverBudget = "chain-over-budget", Schedule;
     /// A module's tables exceed what the engine can index.
     TableTooLarge = "table-too-large", Input;
     /// The slot is shorter than a worst-case 8-byte frame plus the guard.

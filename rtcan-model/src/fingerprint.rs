@@ -70,9 +70,34 @@ pub fn canonical(plan: &Plan) -> String {
     s
 }
 
-/// Fingerprint of a plan.
+/// The bus contract every module must share whatever topics it uses: bit rate, slots,
+/// slot length, cycle-counter wrap, laxity encoding, guard and master (not the
+/// hyperperiod: a calendar built for a divisor of it stays valid while the counter wraps
+/// at a common multiple).
+pub fn contract(plan: &Plan) -> String {
+    let b = &plan.bus;
+    format!(
+        "bus {} {} {} wrap={} {:?} {} master={}",
+        b.bitrate,
+        b.slots_per_cycle,
+        b.slot_ns,
+        b.cycle_counter_wrap,
+        b.laxity,
+        b.guard_ns,
+        plan.modules.get(b.master).map_or("", |m| m.name.as_str())
+    )
+}
+
+/// Fingerprint of a plan. Without a lock: the whole canonical plan (any edit changes
+/// it). With a robot.lock: its lineage and the bus contract, so images built from older
+/// robot.toml of the same lock history keep the same fingerprint; the lock never reuses
+/// an ID for another layout, so such images cannot misread each other's frames, and
+/// `rtcan check --against` lists the modules whose topics disagree.
 pub fn of(plan: &Plan) -> u32 {
-    fnv1a32(canonical(plan).as_bytes())
+    match plan.lineage {
+        Some(l) => fnv1a32(format!("lineage {l:#010x}\n{}", contract(plan)).as_bytes()),
+        None => fnv1a32(canonical(plan).as_bytes()),
+    }
 }
 
 #[cfg(test)]

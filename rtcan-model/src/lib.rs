@@ -15,12 +15,14 @@
 )]
 
 pub mod bridge_keys;
+pub mod chains;
 pub mod compat;
 pub mod costs;
 pub mod diag;
 pub mod filters;
 pub mod fingerprint;
 pub mod ids;
+pub mod lock;
 pub mod model;
 pub mod names;
 pub mod params;
@@ -100,7 +102,20 @@ impl Analysis {
 
 /// Parses, validates and plans `source` (named `file` in diagnostics). Never panics.
 pub fn analyze(file: &str, source: &str) -> Analysis {
+    analyze_locked(file, source, None)
+}
+
+/// [`analyze`] with the robot.lock text (`(file name, text)`), whose allocation is kept.
+pub fn analyze_locked(file: &str, source: &str, lock: Option<(&str, &str)>) -> Analysis {
     let mut items = Vec::new();
+    let lock = match lock.map(|(f, t)| lock::parse(f, t)) {
+        Some(Ok(l)) => Some(l),
+        Some(Err(d)) => {
+            items.push(d);
+            None
+        }
+        None => None,
+    };
     let mut model = None;
     let mut plan = None;
     match syntax::parse(source) {
@@ -132,9 +147,12 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
                 params::validate(entries, m, &mut items);
             }
             if let Some(m) = &model {
-                plan = plan::build(m, file, &mut items);
-                if let Some(p) = &plan {
+                plan = plan::build_locked(m, file, lock.as_ref(), &mut items);
+                if let Some(p) = &mut plan {
                     timing::check(m, p, &mut items);
+                    if let syntax::Kind::Table(entries) = &root.kind {
+                        p.chains = chains::check(entries, m, p, &mut items);
+                    }
                 }
             }
             if !items.is_empty() {
@@ -149,6 +167,40 @@ pub fn analyze(file: &str, source: &str) -> Analysis {
             file: file.to_string(),
             source: source.to_string(),
             items,
+        },
+    }
+}
+
+/// Reads `path` (named `shown` in diagnostics) and its robot.lock when there is one
+/// ([`lock::path_for`]), and analyzes them: what build.rs, `rtcan::robot!`, the CLI and
+/// [`Robot::load`] all do, so they get the same allocation.
+pub fn read_analysis(path: &Path, shown: &str) -> Analysis {
+    let source = match read_source(path, shown) {
+        Ok(s) => s,
+        Err(diagnostics) => {
+            return Analysis {
+                model: None,
+                plan: None,
+                diagnostics,
+            }
+        }
+    };
+    let lock_path = lock::path_for(path);
+    let lock_shown = lock::path_for(Path::new(shown)).display().to_string();
+    match lock_path
+        .exists()
+        .then(|| read_source(&lock_path, &lock_shown))
+    {
+        None => analyze(shown, &source),
+        Some(Ok(text)) => analyze_locked(shown, &source, Some((&lock_shown, &text))),
+        Some(Err(d)) => Analysis {
+            model: None,
+            plan: None,
+            diagnostics: Diagnostics {
+                file: shown.to_string(),
+                source,
+                items: d.items,
+            },
         },
     }
 }
@@ -244,7 +296,11 @@ impl Robot {
     pub fn load(path: impl AsRef<Path>) -> Result<Plan, Diagnostics> {
         let path = path.as_ref();
         let file = path.display().to_string();
-        Robot::parse(&file, &read_source(path, &file)?)
+        let a = read_analysis(path, &file);
+        match a.plan {
+            Some(plan) if a.diagnostics.is_empty() => Ok(plan),
+            _ => Err(a.diagnostics),
+        }
     }
 
     /// Plans robot.toml text.

@@ -3,6 +3,7 @@
 //! fingerprint).
 use crate::diag::{Code, Diagnostic};
 use crate::filters::{self, Bank, WireTopic};
+use crate::lock::Lock;
 use crate::model::{Board, FilterMode, Model, MsgType, Node};
 use crate::schedule::{self, HrtTopic};
 use crate::{ids, units};
@@ -187,11 +188,18 @@ pub struct Plan {
     pub admission_steps: u64,
     /// Bus load.
     pub load: Load,
-    /// Robot fingerprint (FNV-1a 32 of the canonical plan), carried in heartbeats.
+    /// Robot fingerprint carried in heartbeats: FNV-1a 32 of the canonical plan, or with
+    /// a lock of the lock's lineage and the bus contract (fingerprint.rs).
     pub fingerprint: u32,
     /// Robot name, writable / link / ROS 2 topics (not part of the fingerprint: they do
     /// not change the bus).
     pub bridge: crate::bridge_keys::BridgeDecl,
+    /// Lineage of the robot.lock the plan was made with.
+    pub lineage: Option<u32>,
+    /// What the lock held that this plan had to move, with reasons.
+    pub moves: Vec<crate::lock::Move>,
+    /// End-to-end chains with their bounds (`[chains]`; filled by `analyze`).
+    pub chains: Vec<crate::chains::ChainBound>,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -363,9 +371,24 @@ fn pool_limits(model: &Model, topics: &[TopicPlan], diags: &mut Vec<Diagnostic>)
 /// Plans a validated model. Errors (schedule, filters, table sizes) are pushed to `diags`;
 /// a plan is returned only when there are none.
 pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<Plan> {
+    build_locked(model, file, None, diags)
+}
+
+/// [`build`] keeping the allocation of `lock` (robot.lock) where possible.
+pub fn build_locked(
+    model: &Model,
+    file: &str,
+    lock: Option<&Lock>,
+    diags: &mut Vec<Diagnostic>,
+) -> Option<Plan> {
     let start = diags.len();
     let bus = &model.bus;
-    let Some(msg_ids) = ids::assign(model) else {
+    let mut moves = Vec::new();
+    let assigned = match lock {
+        Some(l) => crate::lock::assign_ids(model, l, &mut moves),
+        None => ids::assign(model),
+    };
+    let Some(msg_ids) = assigned else {
         diags.push(Diagnostic::new(
             Code::TableTooLarge,
             None,
@@ -423,7 +446,9 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
         })
         .collect();
     hrt.sort_by_key(|h| topics.get(h.topic).map(|t| t.msg_id));
-    let admitted = match schedule::admit(model, &hrt) {
+    let names: Vec<&str> = topics.iter().map(|t| t.name.as_str()).collect();
+    let placed = lock.and_then(|l| crate::lock::place(model, &hrt, &names, &msg_ids, l));
+    let admitted = match placed.map_or_else(|| schedule::admit(model, &hrt), Ok) {
         Ok(a) => {
             for (h, p) in hrt.iter().zip(&a.placements) {
                 if let Some(t) = topics.get_mut(h.topic) {
@@ -437,6 +462,9 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
             None
         }
     };
+    if let Some(l) = lock {
+        phase_moves(l, &topics, &mut moves);
+    }
     let slots = u64::from(bus.slots);
     let hyper = admitted
         .as_ref()
@@ -482,8 +510,26 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
             .filter(|w| rx_set.contains(&w.topic))
             .copied()
             .collect();
+        let locked_banks = lock.and_then(|l| l.banks.get(&m.name));
+        let name_of = |i: usize| topics.get(i).map_or_else(String::new, |t| t.name.clone());
         let banks = match m.filters {
-            FilterMode::Exact => filters::pack(&wanted, &wire),
+            FilterMode::Exact => {
+                match locked_banks.map(|b| crate::lock::reuse_banks(b, &wanted, &wire, &name_of)) {
+                    Some(Ok(b)) => b,
+                    Some(Err(reason)) => {
+                        let b = filters::pack(&wanted, &wire);
+                        moves.push(crate::lock::Move {
+                            subject: m.name.clone(),
+                            what: "filters",
+                            from: format!("{} banks", locked_banks.map_or(0, Vec::len)),
+                            to: format!("{} banks", b.len()),
+                            reason,
+                        });
+                        b
+                    }
+                    None => filters::pack(&wanted, &wire),
+                }
+            }
             FilterMode::AcceptAll => vec![Bank {
                 filter: filters::FilterBank::Mask { id: 0, mask: 0 },
                 purpose: filters::BankPurpose::AcceptAll,
@@ -556,6 +602,17 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
             }
         }
         calendar.sort_by_key(|c| c.slot);
+        if let Some(old) = lock.and_then(|l| l.modules.get(&m.name)) {
+            if usize::from(*old) != mi {
+                moves.push(crate::lock::Move {
+                    subject: m.name.clone(),
+                    what: "module-index",
+                    from: old.to_string(),
+                    to: mi.to_string(),
+                    reason: "modules are numbered in file order (heartbeat ID = 0x100 + index): add new modules after the existing ones".to_string(),
+                });
+            }
+        }
         modules.push(ModulePlan {
             name: m.name.clone(),
             index: mi as u8,
@@ -654,9 +711,45 @@ pub fn build(model: &Model, file: &str, diags: &mut Vec<Diagnostic>) -> Option<P
         load,
         fingerprint: 0,
         bridge: model.bridge.clone(),
+        lineage: lock.map(|l| l.lineage),
+        moves,
+        chains: Vec::new(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)
+}
+
+/// A locked HRT phase that changed, with why.
+fn phase_moves(lock: &Lock, topics: &[TopicPlan], moves: &mut Vec<crate::lock::Move>) {
+    for t in topics {
+        let Some(lt) = lock.topics.get(&t.name) else {
+            continue;
+        };
+        let (Some(old), Some(new)) = (lt.phase, t.phase_slot) else {
+            continue;
+        };
+        if old == new {
+            continue;
+        }
+        let reason = if lt.period != t.period_slots {
+            format!(
+                "period changed: {} -> {} slots",
+                lt.period.unwrap_or(0),
+                t.period_slots.unwrap_or(0)
+            )
+        } else if lt.msg_id != t.msg_id.0 {
+            "its message ID moved".to_string()
+        } else {
+            "the HRT set does not fit around the locked phases: full re-admission".to_string()
+        };
+        moves.push(crate::lock::Move {
+            subject: t.name.clone(),
+            what: "phase",
+            from: old.to_string(),
+            to: new.to_string(),
+            reason,
+        });
+    }
 }
 
 fn bus_plan(model: &Model, hyper: u64, hyper_cycles: u32) -> BusPlan {

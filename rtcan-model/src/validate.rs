@@ -15,7 +15,7 @@ use rtcan_core::timing::{bits_to_ns, worst_case_bits};
 use rtcan_core::Class;
 
 const TOP_KEYS: &[&str] = &[
-    "bus", "types", "modules", "nodes", "topics", "sim", "params", "robot",
+    "bus", "types", "modules", "nodes", "topics", "sim", "params", "robot", "chains",
 ];
 const BUS_KEYS: &[&str] = &[
     "bitrate",

@@ -130,3 +130,39 @@ fn removed_module_is_not_listed() {
     fewer.modules.truncate(fewer.modules.len() - 1);
     assert!(images_to_change(&old, &fewer).is_empty());
 }
+
+/// With a robot.lock (issue 14), adding the IMU module with its HRT topic to the gateway
+/// changes only the new module and the gateway (receiver and master); every other image
+/// is compatible and the heartbeat fingerprint is unchanged, so they keep running.
+#[test]
+fn with_a_lock_only_the_new_module_and_the_master_change() {
+    let src = triskar2_src();
+    let a = rtcan_model::analyze("robot.toml", &src);
+    let lock = rtcan_model::lock::render(a.model.as_ref().unwrap(), a.plan.as_ref().unwrap(), None);
+    let locked = |s: &str| {
+        rtcan_model::analyze_locked("robot.toml", s, Some(("robot.lock", &lock)))
+            .plan
+            .unwrap()
+    };
+    let old = locked(&src);
+    let new = locked(&with_imu(&src));
+    assert_eq!(old.fingerprint, new.fingerprint);
+    let ch = images_to_change(&old, &new);
+    assert_eq!(names(&ch), ["gateway", "imu"], "{ch:#?}");
+    let gw = &ch[0];
+    assert!(
+        gw.reasons.iter().any(|r| r == "topic \"imu_rate\": added"),
+        "{gw:#?}"
+    );
+    assert!(
+        gw.reasons
+            .iter()
+            .any(|r| r == "master reservation masks changed"),
+        "{gw:#?}"
+    );
+    assert!(
+        new.moves.iter().all(|m| m.subject == "gateway"),
+        "{:?}",
+        new.moves
+    );
+}

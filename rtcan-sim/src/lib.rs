@@ -13,6 +13,7 @@
 
 pub mod bus;
 pub mod candump;
+pub mod chains;
 pub mod clock;
 pub mod compare;
 pub mod controller;
