@@ -1205,7 +1205,6 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let bus = self.tables.bus;
-        let cycle_ns = bus.cycle_ns().max(1);
         let abs_cycle = self.clock.nearest_cycle(sof);
         self.last_sync_cycle = abs_cycle;
         self.cycle_mask = sync.mask;
@@ -1218,7 +1217,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         // Refresh the cycle map from the slot clock: offset from this SOF, slot length and
         // inverse from the rate factors (multiplies; the sync's one 64-bit division is
         // the clock's rate measurement).
-        let start_bus = abs_cycle.saturating_mul(cycle_ns);
+        let start_bus = self.clock.cycle_start_bus(abs_cycle);
         self.pos.start_bus = start_bus;
         self.pos.start_local = self.clock.to_local(start_bus);
         self.pos.slot_q16 = self.clock.local_q16(bus.slot_ns).max(1 << 16);
