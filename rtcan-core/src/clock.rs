@@ -223,7 +223,9 @@ impl SlotClock {
         }
         // e < 2^31, recip_hi < 2^32 (cycle > 256 ns) and recip_lo < 2^32: both products
         // fit; off the exact quotient by under one unit (the truncated fraction).
-        let per_cycle = e * self.recip_hi + ((e * self.recip_lo + (1 << 31)) >> 32);
+        // 32 × 32 → 64 multiplies (all three operands are below 2^32).
+        let (e32, hi, lo) = (e as u32 as u64, self.recip_hi as u32, self.recip_lo as u32);
+        let per_cycle = e32 * u64::from(hi) + ((e32 * u64::from(lo) + (1 << 31)) >> 32);
         let q = if n == 1 {
             per_cycle
         } else {
@@ -378,6 +380,9 @@ fn inverse_q40(a: i64) -> i64 {
     if a.unsigned_abs() > MAX_RATE_Q40 {
         return 0;
     }
+    // |A| <= MAX_RATE_Q40 < 2^34, so A >> 6 and every term >> 6 fit in an i32: each
+    // product is one 32 × 32 → 64 multiply (a 64 × 64 one is three, issue 10).
+    let a6 = (a >> 6) as i32;
     let (mut sum, mut term) = (0i64, a);
     for _ in 0..6 {
         if term == 0 {
@@ -385,7 +390,7 @@ fn inverse_q40(a: i64) -> i64 {
         }
         sum -= term;
         // A^(k+1) with the sign flipped: the series alternates.
-        term = -(((term >> 6) * (a >> 6) + (1 << 27)) >> 28);
+        term = -((i64::from((term >> 6) as i32) * i64::from(a6) + (1 << 27)) >> 28);
     }
     sum
 }
