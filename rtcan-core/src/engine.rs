@@ -161,6 +161,13 @@ pub struct Policy {
     /// otherwise a frame loaded early keeps a stale priority and loses arbitration to
     /// less urgent frames loaded later. Aborting a pending frame costs no bus time.
     pub refresh_laxity: bool,
+    /// Window frames take at most `MAILBOXES − 1` mailboxes, so the next sync or HRT
+    /// fragment always finds one free, even before the completions of the window's last
+    /// frames have reached the engine (on a real CPU they are processed by a task after
+    /// the TX interrupt, which may run after the next slot's frame is loaded or prepared;
+    /// issue 10). Costs no throughput: two mailboxes already keep the bus busy back to
+    /// back (one transmits while the other waits).
+    pub keep_tdma_mailbox: bool,
 }
 
 impl Policy {
@@ -169,6 +176,7 @@ impl Policy {
         fit_window_end: true,
         drop_hopeless: true,
         refresh_laxity: true,
+        keep_tdma_mailbox: true,
     };
     /// The RTCAN paper's policy as published: EDF head only, drop only once the
     /// deadline has passed.
@@ -176,6 +184,7 @@ impl Policy {
         fit_window_end: false,
         drop_hopeless: false,
         refresh_laxity: false,
+        keep_tdma_mailbox: false,
     };
 }
 
@@ -965,6 +974,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let now_bus = self.bus_time(now);
         let remaining = self.window_end - now;
         while let Some(free) = self.mailboxes.iter().position(|m| *m == Loaded::Free) {
+            if self.policy.keep_tdma_mailbox && self.in_flight >= MAILBOXES - 1 {
+                break;
+            }
             let Some((key, mut item)) = self.pick(now_bus, remaining, host) else {
                 break;
             };
