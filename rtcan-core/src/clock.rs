@@ -299,6 +299,18 @@ impl SlotClock {
         }
         self.to_bus(local).saturating_sub(self.anchor_bus) / self.cycle_ns
     }
+    /// The cycle of the sync just handled at local time `sof`: its absolute cycle and the
+    /// bus and local time of its slot 0, i.e. the anchor itself (what `nearest_cycle`,
+    /// `cycle_start_bus` and `to_local` give there, without the three calls); `None`
+    /// when `sof` is not the anchor.
+    #[inline]
+    pub fn anchor_cycle(&self, sof: Nanos) -> Option<(u64, Nanos, Nanos)> {
+        (self.locked && sof == self.anchor_local && self.anchor_bus != Nanos::MAX).then_some((
+            self.abs_cycle,
+            self.anchor_bus,
+            self.anchor_local,
+        ))
+    }
     /// Bus time of slot 0 of absolute cycle `abs_cycle` (`abs_cycle · cycle_ns`,
     /// saturating); the anchor's, kept, for the cycle of the last sync.
     pub fn cycle_start_bus(&self, abs_cycle: u64) -> Nanos {

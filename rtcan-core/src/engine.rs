@@ -1217,7 +1217,15 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let bus = self.tables.bus;
-        let abs_cycle = self.clock.nearest_cycle(sof);
+        // At the sync just handled the cycle map starts at the clock's anchor.
+        let (abs_cycle, start_bus, start_local) = match self.clock.anchor_cycle(sof) {
+            Some(c) => c,
+            None => {
+                let abs = self.clock.nearest_cycle(sof);
+                let bus = self.clock.cycle_start_bus(abs);
+                (abs, bus, self.clock.to_local(bus))
+            }
+        };
         self.last_sync_cycle = abs_cycle;
         self.cycle_mask = sync.mask;
         self.mask_cycle = abs_cycle;
@@ -1227,11 +1235,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.enter_cycle(abs_cycle, 1);
         }
         // Refresh the cycle map from the slot clock: offset from this SOF, slot length and
-        // inverse from the rate factors (multiplies; the sync's one 64-bit division is
-        // the clock's rate measurement).
-        let start_bus = self.clock.cycle_start_bus(abs_cycle);
+        // inverse from the rate factors (multiplies; no division when this sync follows
+        // the last one by a cycle, `SlotClock::on_sync`).
         self.pos.start_bus = start_bus;
-        self.pos.start_local = self.clock.to_local(start_bus);
+        self.pos.start_local = start_local;
         self.pos.slot_q16 = self.clock.local_q16(bus.slot_ns).max(1 << 16);
         self.pos.inv_q32 = self.clock.bus_per_local_q32();
         self.next_boundary = self.pos.boundary(self.pos.next_slot);
