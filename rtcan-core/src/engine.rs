@@ -781,7 +781,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         p.abs_cycle = abs_cycle;
         p.cycle_in_hyper = mod_small(abs_cycle, bus.hyperperiod_cycles);
         p.counter = mod_small(abs_cycle, bus.cycle_counter_wrap);
-        p.start_bus = abs_cycle.saturating_mul(bus.cycle_ns());
+        // `abs_cycle · cycle_ns`; the clock's anchor when it is the last sync's cycle (a
+        // saturating 64-bit product otherwise).
+        p.start_bus = self.clock.cycle_start_bus(abs_cycle);
         p.next_slot = next_slot;
         self.cursor = CalendarCursor::default();
     }
