@@ -53,10 +53,15 @@ pub struct SlotClock {
     rate_q40: i64,
     /// Its inverse: bus ns per local ns = 1 + inv_q40 / 2^40.
     inv_q40: i64,
-    /// `2^recip_sh / cycle_ns` (32 significant bits), so a sync measures the rate with
-    /// a multiply instead of a 64-bit division; 0 for cycles of 2^32 ns and more.
-    recip: u64,
-    recip_sh: u32,
+    /// `2^40 / cycle_ns` as a 32.32 fixed-point number (`recip_hi` whole, `recip_lo`
+    /// fraction), so a sync measures the rate with two 32 × 32 multiplies and no shift by
+    /// a variable amount (a library call at opt-level z); 0 for cycles of 256 ns or less
+    /// and of 2^32 ns and more (then the 64-bit division).
+    recip_hi: u64,
+    recip_lo: u64,
+    /// `cycle_ns / 100`: the plausibility bound of a one-cycle sync gap (`|err| · 100 <=
+    /// d_bus` for whole ns), precomputed for the fast path of the next sync.
+    err_max: u64,
 }
 
 impl SlotClock {
@@ -87,18 +92,22 @@ impl SlotClock {
             counter: 0,
             rate_q40: 0,
             inv_q40: 0,
-            recip: 0,
-            recip_sh: 0,
+            recip_hi: 0,
+            recip_lo: 0,
+            err_max: 0,
         }
         .with_reciprocal()
     }
 
-    /// Precomputes `recip` (one 64-bit division, at construction only).
+    /// Precomputes `recip_hi`, `recip_lo` and `err_max` (64-bit divisions, at
+    /// construction only).
     fn with_reciprocal(mut self) -> Self {
-        let bits = 64 - self.cycle_ns.leading_zeros();
-        if bits <= 32 {
-            self.recip_sh = 31 + bits;
-            self.recip = (1u64 << self.recip_sh) / self.cycle_ns.max(1);
+        let cyc = self.cycle_ns.max(1);
+        self.err_max = cyc / 100;
+        if cyc > 256 && cyc >> 32 == 0 {
+            self.recip_hi = (1u64 << Q) / cyc;
+            // The remainder is below `cyc` < 2^32: shifted by 32 it still fits.
+            self.recip_lo = (((1u64 << Q) % cyc) << 32) / cyc;
         }
         self
     }
@@ -115,6 +124,28 @@ impl SlotClock {
             return true;
         }
         let d_local = nanos_i64(sof) - nanos_i64(self.anchor_local);
+        // The common case first: the next sync, one cycle after the last, within the
+        // plausibility bound. The general path below finds the same: its estimate of the
+        // elapsed cycles (rate within 1 %) rounds to 1, the counter difference is 1, and
+        // it applies the same bound. This skips the estimate's rounding division, the
+        // counter unwrap and the 64-bit products (issue 10: the sync's CPU time).
+        let cyc_u = self.cycle_ns;
+        let next = if self.counter + 1 >= self.wrap {
+            0
+        } else {
+            self.counter + 1
+        };
+        if counter == next && d_local > 0 {
+            let err = d_local - nanos_i64(cyc_u);
+            if err.unsigned_abs() <= self.err_max {
+                return self.accept(sof, counter, 1, err, nanos_i64(cyc_u));
+            }
+        }
+        self.on_sync_general(sof, counter, d_local)
+    }
+
+    /// `on_sync` of a locked slave, any gap: unwraps the counter, checks plausibility.
+    fn on_sync_general(&mut self, sof: Nanos, counter: u32, d_local: i64) -> bool {
         let cyc = nanos_i64(self.cycle_ns);
         let max_gap = MAX_GAP_NS.max(cyc.saturating_add(cyc).saturating_add(cyc));
         if d_local <= 0 || d_local > max_gap {
@@ -152,6 +183,13 @@ impl SlotClock {
             self.lock(sof, counter);
             return true;
         }
+        self.accept(sof, counter, d_cycles, err, d_bus)
+    }
+
+    /// A plausible sync `d_cycles` (> 0) cycles after the last, its SOF `err` ns off the
+    /// current anchor's prediction at rate 1 (`d_bus = d_cycles · cycle_ns`): measure
+    /// the rate, low-pass it, move the anchor.
+    fn accept(&mut self, sof: Nanos, counter: u32, d_cycles: i64, err: i64, d_bus: i64) -> bool {
         let measured = self.measure(err, d_cycles, d_bus);
         if measured.unsigned_abs() > MAX_RATE_Q40 {
             self.lock(sof, counter);
@@ -160,31 +198,34 @@ impl SlotClock {
         let rate = if self.rate_valid {
             // Light low-pass: SOF timestamps jitter; a real drift change still settles
             // within a few cycles.
-            self.rate_q40 + (measured - self.rate_q40) / 4
+            self.rate_q40 + div4(measured - self.rate_q40)
         } else {
             measured
         };
         self.set_rate(rate);
         self.rate_valid = true;
-        self.abs_cycle = self.abs_cycle.saturating_add(d_cycles as u64);
+        self.abs_cycle = self.abs_cycle.saturating_add(d_cycles.unsigned_abs());
         self.anchor_local = sof;
-        self.anchor_bus = self.abs_cycle.saturating_mul(self.cycle_ns);
+        // `abs_cycle · cycle_ns`, by an addition (`d_bus` is the cycles just added).
+        self.anchor_bus = self.anchor_bus.saturating_add(d_bus.unsigned_abs());
         self.counter = counter;
         true
     }
 
-    /// `err / d_bus · 2^40` with `d_bus = d_cycles · cycle_ns`: `err · recip` shifted,
-    /// then divided by `d_cycles` in 16-bit digits (32-bit divides) if syncs were
-    /// missed; the 64-bit division only for cycles ≥ 4.29 s, errors ≥ 2^31 ns or gaps of
-    /// 2^16 cycles and more.
+    /// `err / d_bus · 2^40` with `d_bus = d_cycles · cycle_ns`: `err · 2^40 / cycle_ns`
+    /// from the 32.32 reciprocal (rounded), then divided by `d_cycles` in 16-bit digits
+    /// (32-bit divides) if syncs were missed; the 64-bit division only for cycles of
+    /// 256 ns or less or ≥ 4.29 s, errors ≥ 2^31 ns or gaps of 2^16 cycles and more.
     fn measure(&self, err: i64, d_cycles: i64, d_bus: i64) -> i64 {
         let (e, n) = (err.unsigned_abs(), d_cycles.unsigned_abs());
-        if self.recip == 0 || e >> 31 != 0 || n >> 16 != 0 || n == 0 || self.recip_sh < Q {
+        if self.recip_hi == 0 || e >> 31 != 0 || n >> 16 != 0 || n == 0 {
             return rate_q40_of(err, d_bus);
         }
-        // e < 2^31 and recip <= 2^32: the product fits.
-        let sh = self.recip_sh - Q;
-        let per_cycle = (e * self.recip + ((1 << sh) >> 1)) >> sh;
+        // e < 2^31, recip_hi < 2^32 (cycle > 256 ns) and recip_lo < 2^32: both products
+        // fit; off the exact quotient by under one unit (the truncated fraction).
+        // 32 × 32 → 64 multiplies (all three operands are below 2^32).
+        let (e32, hi, lo) = (e as u32 as u64, self.recip_hi as u32, self.recip_lo as u32);
+        let per_cycle = e32 * u64::from(hi) + ((e32 * u64::from(lo) + (1 << 31)) >> 32);
         let q = if n == 1 {
             per_cycle
         } else {
@@ -258,6 +299,26 @@ impl SlotClock {
         }
         self.to_bus(local).saturating_sub(self.anchor_bus) / self.cycle_ns
     }
+    /// The cycle of the sync just handled at local time `sof`: its absolute cycle and the
+    /// bus and local time of its slot 0, i.e. the anchor itself (what `nearest_cycle`,
+    /// `cycle_start_bus` and `to_local` give there, without the three calls); `None`
+    /// when `sof` is not the anchor.
+    #[inline]
+    pub fn anchor_cycle(&self, sof: Nanos) -> Option<(u64, Nanos, Nanos)> {
+        (self.locked && sof == self.anchor_local && self.anchor_bus != Nanos::MAX).then_some((
+            self.abs_cycle,
+            self.anchor_bus,
+            self.anchor_local,
+        ))
+    }
+    /// Bus time of slot 0 of absolute cycle `abs_cycle` (`abs_cycle · cycle_ns`,
+    /// saturating); the anchor's, kept, for the cycle of the last sync.
+    pub fn cycle_start_bus(&self, abs_cycle: u64) -> Nanos {
+        if abs_cycle == self.abs_cycle && self.locked {
+            return self.anchor_bus;
+        }
+        abs_cycle.saturating_mul(self.cycle_ns)
+    }
     /// Absolute cycle of the last sync received (`None` before lock; master: `None`).
     pub fn last_sync_cycle(&self) -> Option<u64> {
         (self.locked && !self.master).then_some(self.abs_cycle)
@@ -287,6 +348,10 @@ impl SlotClock {
     }
     /// Local time at which bus time `bus` occurs (within 1 ns, the inverse of `to_bus`).
     pub fn to_local(&self, bus: Nanos) -> Nanos {
+        if bus == self.anchor_bus {
+            // The start of the cycle of the last sync (the engine's cycle map at a sync).
+            return self.anchor_local;
+        }
         let d_bus = nanos_i64(bus) - nanos_i64(self.anchor_bus);
         let d_local = scale(d_bus, self.rate_q40);
         clamp_nanos(nanos_i64(self.anchor_local).saturating_add(d_local))
@@ -327,14 +392,23 @@ fn inverse_q40(a: i64) -> i64 {
     if a.unsigned_abs() > MAX_RATE_Q40 {
         return 0;
     }
-    let (mut sum, mut term) = (0i64, a);
-    for _ in 0..6 {
+    // |A| <= MAX_RATE_Q40 < 2^34, so A >> 6 fits in an i32, and every term from A² on
+    // is below 2^27 units: each product is one 32 × 32 → 64 multiply and the terms are
+    // 32-bit (64 × 64 products and 64-bit terms cost three times as much, issue 10).
+    let a6 = (a >> 6) as i32;
+    if a == 0 {
+        return 0;
+    }
+    let mut sum = -a;
+    // A^(k+1) with the sign flipped: the series alternates.
+    let next = |t6: i32| -(((i64::from(t6) * i64::from(a6) + (1 << 27)) >> 28) as i32);
+    let mut term = next(a6);
+    for _ in 1..6 {
         if term == 0 {
             break;
         }
-        sum -= term;
-        // A^(k+1) with the sign flipped: the series alternates.
-        term = -(((term >> 6) * (a >> 6) + (1 << 27)) >> 28);
+        sum -= i64::from(term);
+        term = next(term >> 6);
     }
     sum
 }
@@ -351,6 +425,12 @@ fn rate_q40_of(err: i64, d_bus: i64) -> i64 {
     let s = headroom.min(Q);
     let q = div_round(err << s, d_bus);
     q.saturating_mul(1 << (Q - s))
+}
+
+/// `x / 4` rounded toward zero (as `/`), by shifts: a signed 64-bit division by a
+/// constant is a library call at opt-level z.
+fn div4(x: i64) -> i64 {
+    (x + ((x >> 63) & 3)) >> 2
 }
 
 /// `x / d` rounded down for `0 < d < 2^16`: four 32-bit divisions (one instruction
@@ -423,6 +503,31 @@ mod tests {
     }
 
     #[test]
+    fn inverse_series_in_32_bits_equals_the_64_bit_series() {
+        // The series as first written, all in 64 bits.
+        let reference = |a: i64| {
+            let (mut sum, mut term) = (0i64, a);
+            for _ in 0..6 {
+                if term == 0 {
+                    break;
+                }
+                sum -= term;
+                term = -(((term >> 6) * (a >> 6) + (1 << 27)) >> 28);
+            }
+            sum
+        };
+        let max = MAX_RATE_Q40 as i64;
+        let mut a = -max;
+        while a <= max {
+            assert_eq!(inverse_q40(a), reference(a), "{a}");
+            a += 7_919_977;
+        }
+        for a in [-max, -1, 0, 1, 63, 64, -64, -65, max] {
+            assert_eq!(inverse_q40(a), reference(a), "{a}");
+        }
+    }
+
+    #[test]
     fn rate_measurement_is_exact_to_the_ppb_and_never_overflows() {
         // 1000 ppm over one 10 ms cycle, and over 3000 s (shifted quotient).
         for d_bus in [10_000_000i64, 3_000_000_000_000] {
@@ -453,7 +558,7 @@ mod tests {
         for slot_ns in [166_666u64, 200_000, 1_000, 70_000_000, 100_000_000] {
             let clk = SlotClock::slave(&bus(slot_ns));
             let cyc = nanos_i64(clk.cycle_ns);
-            assert_eq!(clk.recip == 0, cyc >= 1 << 32, "{slot_ns}");
+            assert_eq!(clk.recip_hi == 0, cyc >= 1 << 32 || cyc <= 256, "{slot_ns}");
             for n in [1i64, 2, 3, 255, 65_535, 65_536, 100_000] {
                 let d_bus = n * cyc;
                 for err in [
@@ -486,6 +591,90 @@ mod tests {
             for d in [1u32, 2, 7, 65_535] {
                 assert_eq!(div_by_u16(x, d), x / u64::from(d), "{x} / {d}");
             }
+        }
+    }
+
+    #[test]
+    fn next_sync_fast_path_matches_the_general_path() {
+        let bus = |slot_ns: u64, wrap: u32| crate::tables::BusConfig {
+            bitrate: 1_000_000,
+            slots_per_cycle: 60,
+            slot_ns,
+            hyperperiod_cycles: 1,
+            cycle_counter_wrap: wrap,
+            laxity: crate::laxity::LaxityEncoding::Linear { unit_ns: 1 },
+            guard_ns: 0,
+            fingerprint: 0,
+        };
+        let mut taken = 0;
+        for (slot_ns, wrap) in [
+            (166_666u64, 1 << 15),
+            (200_000, 4),
+            (1_000, 1 << 15),
+            (4, 2),
+        ] {
+            let cyc = 60 * slot_ns as i64;
+            // A slave at +300 ppm with jitter, then syncs near and beyond the ±1 % bound,
+            // a counter jump, a wrap of the counter.
+            let mut fast = SlotClock::slave(&bus(slot_ns, wrap));
+            fast.on_sync(1_000_000, 0);
+            let (mut t, mut c) = (1_000_000i64, 0u32);
+            let steps: [(i64, u32); 12] = [
+                (cyc + cyc * 3 / 10_000, 1),
+                (cyc + cyc * 3 / 10_000 + 7, 1),
+                (cyc - 5, 1),
+                (cyc + cyc / 100, 1),
+                (cyc + cyc / 100 + 1, 1),
+                (cyc - cyc / 100, 1),
+                (cyc - cyc / 100 - 1, 1),
+                (2 * cyc + 3, 2),
+                (cyc, 1),
+                (cyc + 1, 0),
+                (cyc / 2, 1),
+                (cyc + 2, 1),
+            ];
+            for (k, (dt, dc)) in steps.iter().enumerate() {
+                t += dt;
+                c = (c + dc) % fast.wrap;
+                let mut general = fast;
+                let d_local = t - nanos_i64(general.anchor_local);
+                let uses_fast = general.locked
+                    && *dc == 1
+                    && d_local > 0
+                    && (d_local - cyc).unsigned_abs() <= general.err_max;
+                taken += usize::from(uses_fast);
+                if general.locked {
+                    general.on_sync_general(t as Nanos, c, d_local);
+                } else {
+                    general.on_sync(t as Nanos, c as u16);
+                }
+                fast.on_sync(t as Nanos, c as u16);
+                assert_eq!(
+                    format!("{fast:?}"),
+                    format!("{general:?}"),
+                    "slot {slot_ns} step {k}"
+                );
+            }
+        }
+        assert!(taken >= 12, "the fast path ran {taken} times");
+        for x in [
+            -9i64,
+            -8,
+            -7,
+            -5,
+            -4,
+            -3,
+            -1,
+            0,
+            1,
+            3,
+            4,
+            5,
+            7,
+            i64::MIN + 3,
+            i64::MAX,
+        ] {
+            assert_eq!(div4(x), x / 4, "{x}");
         }
     }
 

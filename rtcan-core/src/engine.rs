@@ -161,6 +161,13 @@ pub struct Policy {
     /// otherwise a frame loaded early keeps a stale priority and loses arbitration to
     /// less urgent frames loaded later. Aborting a pending frame costs no bus time.
     pub refresh_laxity: bool,
+    /// Window frames take at most `MAILBOXES − 1` mailboxes, so the next sync or HRT
+    /// fragment always finds one free, even before the completions of the window's last
+    /// frames have reached the engine (on a real CPU they are processed by a task after
+    /// the TX interrupt, which may run after the next slot's frame is loaded or prepared;
+    /// issue 10). Costs no throughput: two mailboxes already keep the bus busy back to
+    /// back (one transmits while the other waits).
+    pub keep_tdma_mailbox: bool,
 }
 
 impl Policy {
@@ -169,6 +176,7 @@ impl Policy {
         fit_window_end: true,
         drop_hopeless: true,
         refresh_laxity: true,
+        keep_tdma_mailbox: true,
     };
     /// The RTCAN paper's policy as published: EDF head only, drop only once the
     /// deadline has passed.
@@ -176,6 +184,7 @@ impl Policy {
         fit_window_end: false,
         drop_hopeless: false,
         refresh_laxity: false,
+        keep_tdma_mailbox: false,
     };
 }
 
@@ -772,7 +781,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         p.abs_cycle = abs_cycle;
         p.cycle_in_hyper = mod_small(abs_cycle, bus.hyperperiod_cycles);
         p.counter = mod_small(abs_cycle, bus.cycle_counter_wrap);
-        p.start_bus = abs_cycle.saturating_mul(bus.cycle_ns());
+        // `abs_cycle · cycle_ns`; the clock's anchor when it is the last sync's cycle (a
+        // saturating 64-bit product otherwise).
+        p.start_bus = self.clock.cycle_start_bus(abs_cycle);
         p.next_slot = next_slot;
         self.cursor = CalendarCursor::default();
     }
@@ -965,6 +976,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let now_bus = self.bus_time(now);
         let remaining = self.window_end - now;
         while let Some(free) = self.mailboxes.iter().position(|m| *m == Loaded::Free) {
+            if self.policy.keep_tdma_mailbox && self.in_flight >= MAILBOXES - 1 {
+                break;
+            }
             let Some((key, mut item)) = self.pick(now_bus, remaining, host) else {
                 break;
             };
@@ -1205,8 +1219,15 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let bus = self.tables.bus;
-        let cycle_ns = bus.cycle_ns().max(1);
-        let abs_cycle = self.clock.nearest_cycle(sof);
+        // At the sync just handled the cycle map starts at the clock's anchor.
+        let (abs_cycle, start_bus, start_local) = match self.clock.anchor_cycle(sof) {
+            Some(c) => c,
+            None => {
+                let abs = self.clock.nearest_cycle(sof);
+                let bus = self.clock.cycle_start_bus(abs);
+                (abs, bus, self.clock.to_local(bus))
+            }
+        };
         self.last_sync_cycle = abs_cycle;
         self.cycle_mask = sync.mask;
         self.mask_cycle = abs_cycle;
@@ -1216,11 +1237,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.enter_cycle(abs_cycle, 1);
         }
         // Refresh the cycle map from the slot clock: offset from this SOF, slot length and
-        // inverse from the rate factors (multiplies; the sync's one 64-bit division is
-        // the clock's rate measurement).
-        let start_bus = abs_cycle.saturating_mul(cycle_ns);
+        // inverse from the rate factors (multiplies; no division when this sync follows
+        // the last one by a cycle, `SlotClock::on_sync`).
         self.pos.start_bus = start_bus;
-        self.pos.start_local = self.clock.to_local(start_bus);
+        self.pos.start_local = start_local;
         self.pos.slot_q16 = self.clock.local_q16(bus.slot_ns).max(1 << 16);
         self.pos.inv_q32 = self.clock.bus_per_local_q32();
         self.next_boundary = self.pos.boundary(self.pos.next_slot);

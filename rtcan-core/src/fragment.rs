@@ -120,17 +120,14 @@ pub fn fragment_data(payload: &[u8], counter: u8, out: &mut [u8; 8]) -> u8 {
         return 8;
     }
     let rest = payload.get(start..).unwrap_or(&[]);
-    *out = pack_le(rest).to_le_bytes();
+    // The tail (under 8 bytes): a short byte loop into a zeroed array (packing it into a
+    // word cost a 64-bit shift library call per byte at opt-level z, issue 10).
+    let mut w = [0u8; 8];
+    for (d, b) in w.iter_mut().zip(rest) {
+        *d = *b;
+    }
+    *out = w;
     rest.len().min(8) as u8
-}
-
-/// Up to 8 bytes as a little-endian word (bytes past the slice are zero).
-fn pack_le(bytes: &[u8]) -> u64 {
-    bytes
-        .iter()
-        .take(8)
-        .enumerate()
-        .fold(0, |w, (k, b)| w | (*b as u64) << (8 * k))
 }
 
 /// Why a received frame was dropped.
@@ -214,9 +211,11 @@ impl RxState {
                 }
             }
             Some(dst) => {
-                let w = pack_le(data).to_le_bytes();
-                for (d, b) in dst.iter_mut().zip(w) {
-                    *d = b;
+                // `dst` is `data.len()` long: the frame's first bytes, straight from its
+                // 8-byte array (packing them into a word first cost a 64-bit shift
+                // library call per byte at opt-level z, issue 10).
+                for (d, b) in dst.iter_mut().zip(frame.raw_data()) {
+                    *d = *b;
                 }
             }
             None => return RxStep::Dropped(RxDrop::BadSize), // unreachable: size checked above

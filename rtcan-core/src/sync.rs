@@ -30,10 +30,14 @@ pub const fn sync_dlc(slots: u8) -> u8 {
 
 /// Mask of the bits a cycle of `slots` slots may use (bits `0..slots`).
 pub const fn slots_mask(slots: u8) -> u64 {
+    // In 32-bit halves: a 64-bit shift by a variable amount is a library call on the
+    // Cortex-M3 at opt-level z (every sync frame parses this, issue 10).
     if slots >= MAX_SLOTS {
         u64::MAX
+    } else if slots >= 32 {
+        ((((1u32 << (slots - 32)) - 1) as u64) << 32) | u32::MAX as u64
     } else {
-        (1u64 << slots) - 1
+        ((1u32 << slots) - 1) as u64
     }
 }
 
@@ -89,6 +93,18 @@ const EMPTY_SYNC: Frame = match Frame::from_parts(SYNC_ID_0, 1, [1, 0, 0, 0, 0, 
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn slots_mask_in_halves_equals_the_64_bit_shift() {
+        for slots in 0..=70u8 {
+            let expect = if slots >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << slots) - 1
+            };
+            assert_eq!(super::slots_mask(slots), expect, "{slots}");
+        }
+    }
+
     use super::*;
     use crate::id::MsgId;
 

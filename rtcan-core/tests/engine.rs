@@ -931,3 +931,101 @@ fn hrt_transfer_with_a_failed_earlier_fragment_is_reported_missed_once() {
         [(0, Some(rtcan_core::driver::Token(1)), TxOutcome::Sent)]
     );
 }
+
+/// Issue 10: on a real CPU a window frame's completion reaches the engine through a task
+/// after the TX interrupt, possibly after the next reserved slot's frame is loaded (or,
+/// in the firmware, prepared half a slot ahead). Window frames therefore leave one
+/// mailbox free (`Policy::keep_tdma_mailbox`): the HRT frame of the slot after a window
+/// loads although no completion of the window's frames has been processed. Without the
+/// rule the window fills all three and the HRT slot is lost in the same situation.
+#[test]
+fn window_frames_leave_a_mailbox_for_the_next_hrt_frame() {
+    use rtcan_core::driver::{Mailbox, TxResult};
+    use rtcan_core::engine::Policy;
+    let tx: &'static [TxTopic] = Box::leak(Box::new([
+        TxTopic {
+            msg_id: MsgId(0x0150),
+            class: Class::Hrt,
+            size: 8,
+            deadline_ns: 0,
+        },
+        TxTopic {
+            msg_id: MsgId(0x0151),
+            class: Class::Srt,
+            size: 8,
+            deadline_ns: 50_000_000,
+        },
+        TxTopic {
+            msg_id: MsgId(0x0152),
+            class: Class::Srt,
+            size: 8,
+            deadline_ns: 50_000_000,
+        },
+        TxTopic {
+            msg_id: MsgId(0x0153),
+            class: Class::Srt,
+            size: 8,
+            deadline_ns: 50_000_000,
+        },
+    ]));
+    let cal: &'static [CalEntry] = Box::leak(Box::new([CalEntry {
+        slot: 5,
+        tx: 0,
+        fragment: 0,
+    }]));
+    // Sync in slot 0, the HRT frame in slot 5: slots 1 to 4 are a free window.
+    let masks: &'static [u64] = Box::leak(Box::new([1u64 | 1 << 5]));
+    let tables = NodeTables {
+        bus: bus(),
+        module: 0,
+        tx,
+        rx: &[],
+        calendar: cal,
+        master_masks: masks,
+    };
+    let before = Policy {
+        keep_tdma_mailbox: false,
+        ..Policy::OURS
+    };
+    for (policy, window_frames, hrt_loaded) in [(Policy::OURS, 2, true), (before, 3, false)] {
+        let mut e = TestEngine::new(tables, 0);
+        e.set_policy(policy);
+        let (mut can, mut host) = (TestCan::default(), TestHost::default());
+        host.hrt = vec![Some(vec![7; 8])];
+        // Slot 0: the sync, completed at once.
+        e.poll(T0, &mut can, &mut host);
+        let sync = can.mailboxes.iter().position(Option::is_some).unwrap();
+        can.mailboxes[sync] = None;
+        e.on_tx_done(
+            Mailbox(sync as u8),
+            TxResult::Sent,
+            T0 + 130_000,
+            &mut can,
+            &mut host,
+        );
+        // One message on each SRT topic (a topic's messages go one at a time).
+        for tx in 1..4u8 {
+            let token = host.add(&[tx; 8]);
+            e.submit(T0 + 1_000, tx, token, &mut can, &mut host)
+                .unwrap();
+        }
+        assert!(
+            can.mailboxes.iter().all(Option::is_none),
+            "slot 0 is reserved"
+        );
+        // Slot 1 opens the window.
+        e.poll(T0 + SLOT_NS, &mut can, &mut host);
+        let loaded = can.mailboxes.iter().filter(|m| m.is_some()).count();
+        assert_eq!(loaded, window_frames, "{policy:?}");
+        // Slot 5, no completion processed yet (the task that would run them is late).
+        e.poll(T0 + 5 * SLOT_NS, &mut can, &mut host);
+        let hrt = can
+            .mailboxes
+            .iter()
+            .flatten()
+            .filter(|f| f.id().msg_id() == MsgId(0x0150))
+            .count();
+        assert_eq!(hrt == 1, hrt_loaded, "{policy:?}");
+        assert_eq!(e.counters().hrt_late, u32::from(!hrt_loaded), "{policy:?}");
+    }
+}
