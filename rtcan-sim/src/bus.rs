@@ -18,8 +18,12 @@
 //! - Bit errors (optional, `bit_error_rate` per bit): the frame is hit at a uniformly
 //!   drawn bit after the SOF; an error flag (6 bits) and delimiter (8 bits) follow, then
 //!   the intermission. Receivers drop the frame, the transmitter retransmits (or fails
-//!   with NART; or ends aborted if an abort was requested meanwhile). Error counters
-//!   and bus-off are not modelled.
+//!   with NART; or ends aborted if an abort was requested meanwhile). Every controller
+//!   keeps ISO 11898-1 error counters (`confinement.rs`): error-passive, bus-off (no
+//!   transmission, no reception) and recovery after 128 runs of 11 recessive bits,
+//!   counted at each start of frame; level changes reach the module as
+//!   `Module::error_state`; on an idle bus the recovery completes after exactly
+//!   1408 recessive bit times (an `IdleRecover` bus event).
 //! - Receive and transmit interrupts, and timer wake-ups, run `irq_latency_ns` after the
 //!   hardware event. Start-of-frame timestamps are taken by hardware, without latency,
 //!   in the receiver's local clock.
@@ -64,6 +68,17 @@ pub trait Module {
     ) -> Option<Nanos>;
     /// A receive FIFO overran.
     fn rx_overrun(&mut self, now: Nanos);
+    /// The controller's fault-confinement level changed (error-active, error-passive,
+    /// bus-off, recovered: bxCAN's status-change interrupt); `state` has the counters.
+    /// `None` keeps the armed timer (modules without fault handling need do nothing).
+    fn error_state(
+        &mut self,
+        _now: Nanos,
+        _state: rtcan_core::confinement::ErrorState,
+        _can: &mut SimController,
+    ) -> Option<Nanos> {
+        None
+    }
 }
 
 /// Physical parameters of one node.
@@ -145,6 +160,12 @@ enum Ev {
     Cpu {
         node: usize,
     },
+    /// A fault-confinement level change of the node's controller (`confinement.rs`).
+    ErrIrq {
+        node: usize,
+    },
+    /// On an idle bus a bus-off controller may have completed its recovery.
+    IdleRecover,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -232,6 +253,9 @@ pub struct Bus<M: Module> {
     pub stats: BusStats,
     offers: Vec<(u32, usize, usize)>,
     irqs: Vec<(Nanos, Ev)>,
+    /// Recessive bits before the start of frame being arbitrated (trailing bits of the
+    /// last frame and idle time): what bus-off controllers count towards recovery.
+    recessive_run: u64,
 }
 
 fn result_code(r: TxResult) -> u8 {
@@ -270,7 +294,13 @@ impl<M: Module> Bus<M> {
             stats: BusStats::default(),
             offers: Vec::new(),
             irqs: Vec::new(),
+            recessive_run: 0,
         }
+    }
+
+    /// Changes the bit error rate from now on (a campaign's noise burst).
+    pub fn set_bit_error_rate(&mut self, ber: f64) {
+        self.bit_error_rate = ber;
     }
 
     /// Attaches a node; returns its index.
@@ -498,14 +528,70 @@ impl<M: Module> Bus<M> {
 
     fn maybe_start_arbitration(&mut self) {
         if let State::Idle { from } = self.state {
-            if self.nodes.iter().any(|n| n.can.has_pending()) {
+            // A bus-off controller's loaded mailboxes start nothing.
+            if self
+                .nodes
+                .iter()
+                .any(|n| n.can.has_pending() && !n.can.conf.is_bus_off())
+            {
+                // A pending idle-recovery check gives way: the start of frame counts
+                // the recessive run for every bus-off controller.
+                if matches!(self.bus_ev, Some((_, Ev::IdleRecover))) {
+                    self.bus_ev = None;
+                    if let Some(k) = self.keys.first_mut() {
+                        *k = NONE;
+                    }
+                }
                 // Pending frames wait for the intermission to end, then start together.
                 let sof = from.max(self.now);
+                let idle = (sof - from) / self.bit_ns().max(1);
+                self.recessive_run = crate::confinement::TRAILING_RECESSIVE_BITS + idle;
                 self.state = State::Arbitrating { sof };
                 let t = sof + self.bit_ns();
                 self.push_bus(t, Ev::ArbDecide);
+            } else if self.bus_ev.is_none() {
+                // An idle bus still recovers bus-off controllers: wake up when the first
+                // has seen its 128 runs of 11 recessive bits.
+                let left = self
+                    .nodes
+                    .iter()
+                    .filter(|n| n.can.conf.is_bus_off())
+                    .map(|n| n.can.conf.recovery_bits_left())
+                    .min();
+                if let Some(left) = left {
+                    let more = left.saturating_sub(crate::confinement::TRAILING_RECESSIVE_BITS);
+                    let bits = u32::try_from(more).unwrap_or(u32::MAX);
+                    let t = self
+                        .now
+                        .max(from.saturating_add(bits_to_ns(bits, self.bitrate)));
+                    self.push_bus(t, Ev::IdleRecover);
+                }
             }
         }
+    }
+
+    /// The bus stayed idle until now: bus-off controllers whose recovery completed
+    /// within this recessive run recover (the others count the run at the next start of
+    /// frame, or at the next check).
+    fn idle_recover(&mut self) {
+        let State::Idle { from } = self.state else {
+            return;
+        };
+        let idle = self.now.saturating_sub(from) / self.bit_ns().max(1);
+        let run = crate::confinement::TRAILING_RECESSIVE_BITS + idle;
+        for n in 0..self.nodes.len() {
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
+            if node.can.conf.is_bus_off()
+                && node.can.conf.recovery_bits_left() <= run
+                && node.can.conf.recessive(run)
+            {
+                let t = self.now + node.setup.irq_latency_ns;
+                self.push_irq(n, t, Ev::ErrIrq { node: n });
+            }
+        }
+        self.maybe_start_arbitration();
     }
 
     fn start(&mut self) {
@@ -574,6 +660,10 @@ impl<M: Module> Bus<M> {
                 });
             }
             Ev::Cpu { node } => self.cpu_step(node),
+            // The status-change interrupt is not costed by the CPU model: it is rare
+            // (level changes only) and runs directly.
+            Ev::ErrIrq { node } => self.error_irq(node),
+            Ev::IdleRecover => self.idle_recover(),
         }
     }
 
@@ -670,11 +760,16 @@ impl<M: Module> Bus<M> {
         // Reused buffer: this runs once per frame and must not allocate.
         let mut offers = std::mem::take(&mut self.offers);
         offers.clear();
+        // A bus-off controller does not transmit.
         offers.extend(self.nodes.iter().enumerate().filter_map(|(n, node)| {
+            (!node.can.conf.is_bus_off()).then_some(())?;
             node.can
                 .best_pending()
                 .map(|(mb, p)| (p.frame.id().raw(), n, mb))
         }));
+        // The start of frame ended the recessive run: a controller that recovers with it
+        // joins only the next arbitration.
+        self.count_recessive();
         let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
             // Everything was aborted during the SOF bit.
             self.state = State::Idle { from: self.now };
@@ -767,6 +862,15 @@ impl<M: Module> Bus<M> {
             node.can.on_wire = None;
             let lat = now + node.setup.irq_latency_ns;
             let aborting = node.can.abort_requested.get(mb).copied().unwrap_or(false);
+            let level = node.can.conf.level();
+            if ok {
+                node.can.conf.tx_ok();
+            } else {
+                node.can.conf.tx_error();
+            }
+            if node.can.conf.level() != level {
+                irqs.push((lat, Ev::ErrIrq { node: tx }));
+            }
             let result = if ok {
                 node.can.stats.tx_ok += 1;
                 Some(TxResult::Sent)
@@ -791,10 +895,25 @@ impl<M: Module> Bus<M> {
                 ));
             }
         }
+        // Every receiver on the bus counts the frame, whatever its filters.
+        for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
+            let level = node.can.conf.level();
+            if ok {
+                node.can.conf.rx_ok();
+            } else {
+                node.can.conf.rx_error();
+            }
+            if node.can.conf.level() != level {
+                irqs.push((now + node.setup.irq_latency_ns, Ev::ErrIrq { node: n }));
+            }
+        }
         if ok {
             self.stats.frames_ok += 1;
             let mut overruns = Vec::new();
             for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
+                if node.can.conf.is_bus_off() {
+                    continue;
+                }
                 let Some(fifo) = node.can.filter.fifo_for(frame.id().raw()) else {
                     continue;
                 };
@@ -829,7 +948,7 @@ impl<M: Module> Bus<M> {
         }
         for &(t, ev) in &irqs {
             let n = match ev {
-                Ev::RxIrq { node, .. } | Ev::TxIrq { node, .. } => node,
+                Ev::RxIrq { node, .. } | Ev::TxIrq { node, .. } | Ev::ErrIrq { node } => node,
                 _ => continue,
             };
             self.push_irq(n, t, ev);
@@ -837,6 +956,32 @@ impl<M: Module> Bus<M> {
         self.irqs = irqs;
         self.state = State::Idle { from: now + ifs };
         self.maybe_start_arbitration();
+    }
+
+    /// Bus-off controllers count the recessive run that preceded this start of frame;
+    /// those that recover report it.
+    fn count_recessive(&mut self) {
+        let run = self.recessive_run;
+        for n in 0..self.nodes.len() {
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
+            if node.can.conf.recessive(run) {
+                let t = self.now + node.setup.irq_latency_ns;
+                self.push_irq(n, t, Ev::ErrIrq { node: n });
+            }
+        }
+    }
+
+    /// Reports the controller's fault-confinement state to the module.
+    fn error_irq(&mut self, n: usize) {
+        let Some(node) = self.nodes.get(n) else {
+            return;
+        };
+        let state = node.can.conf.state();
+        // A module without fault handling keeps its timer.
+        let keep = node.wake.and(node.last_req.map(|r| r.0));
+        self.callback(n, |m, now, can| m.error_state(now, state, can).or(keep));
     }
 
     fn rx_irq(&mut self, n: usize, fifo: usize) {

@@ -12,14 +12,17 @@
 )]
 
 pub mod bus;
+pub mod campaign;
 pub mod candump;
 pub mod clock;
 pub mod compare;
+pub mod confinement;
 pub mod controller;
 pub mod cpu;
 pub mod cpu_compare;
 pub mod decimate;
 pub mod decode;
+pub mod fault;
 pub mod fixed;
 pub mod histogram;
 pub mod ideal;
@@ -36,6 +39,7 @@ pub mod run;
 pub mod session;
 pub mod slots;
 pub mod svg;
+pub mod sync_watch;
 pub mod tables;
 pub mod traffic;
 pub mod triskar;

@@ -96,6 +96,8 @@ pub struct Request {
     pub sweep: bool,
     /// The bus master stops at this many seconds (triskar2 only).
     pub master_dies_at: Option<f64>,
+    /// Scripted faults, `MODULE:KIND@TIME` (`fault::parse`; triskar2 only).
+    pub faults: Vec<String>,
 }
 
 /// Simulated time against the time it took.
@@ -220,6 +222,9 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             return Err("--master-dies-at is supported by the triskar2 scenario only".into());
         }
     }
+    if !req.faults.is_empty() && !matches!(req.which, Which::Triskar { .. }) {
+        return Err("--fault is supported by the triskar2 scenario only".into());
+    }
     if req.sweep && req.which != Which::Paper {
         return Err("--sweep is supported by the rtcan-paper scenario only".into());
     }
@@ -277,6 +282,11 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
                         "--master-dies-at is supported by the triskar2 scenario only, and {why}"
                     ));
                 }
+                if !req.faults.is_empty() {
+                    return Err(format!(
+                        "--fault is supported by the triskar2 scenario only, and {why}"
+                    ));
+                }
                 let note = format!(
                     "{why}.\nthe triskar2 scenario (plants, node code) runs only the workspace robot; \
                      running the generic traffic scenario of {} instead (HRT always fresh, SRT/NRT at their declared rates).",
@@ -293,6 +303,11 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             let mut cfg = TriskarConfig {
                 sim: req.cfg.clone(),
                 gateway_dies_at_s: req.master_dies_at,
+                faults: req
+                    .faults
+                    .iter()
+                    .map(|f| crate::fault::parse(f, &triskar::MODULES))
+                    .collect::<Result<_, _>>()?,
                 ..TriskarConfig::default()
             };
             if !req.seconds_given {
@@ -325,6 +340,7 @@ mod tests {
             seconds_given: true,
             sweep: false,
             master_dies_at: None,
+            faults: Vec::new(),
         }
     }
 
@@ -397,6 +413,7 @@ mod load_tests {
             seconds_given: true,
             sweep: false,
             master_dies_at: None,
+            faults: Vec::new(),
         };
         let one = events(&run(&r, &mut |_, _| {}).unwrap());
         r.cfg.load = 0.5;

@@ -30,7 +30,7 @@ pub mod module;
 pub mod physics;
 pub mod report;
 
-use module::{App, Fate, Script, Shared, SimModule, SrtLog, TriskarModule};
+use module::{App, Boot, Fate, Script, Shared, SimModule, SrtLog, TriskarModule};
 use physics::{PathSample, Physics};
 
 /// Scenario parameters.
@@ -51,6 +51,8 @@ pub struct TriskarConfig {
     /// Any module (bus index, seconds) stops executing then (failure injection). The run
     /// then steps one cycle at a time and records the supervision table (`supervision`).
     pub module_dies_at: Option<(usize, f64)>,
+    /// Scripted faults (`fault::parse`, `--fault`), on top of the two above.
+    pub faults: Vec<crate::fault::Fault>,
 }
 
 impl Default for TriskarConfig {
@@ -66,6 +68,7 @@ impl Default for TriskarConfig {
             command_until_s: 8.0,
             gateway_dies_at_s: None,
             module_dies_at: None,
+            faults: Vec::new(),
         }
     }
 }
@@ -84,6 +87,12 @@ pub struct ModuleReport {
     pub sync_master: u8,
     /// Motor modules: measured wheel speed (rad/s) and whether the controller is safe.
     pub motor: Option<(f32, bool)>,
+    /// Sends the sync at the end of the run (and is running).
+    pub master: bool,
+    /// Times the module booted again after a scripted fault.
+    pub reboots: u32,
+    /// Times the module left the safe state after it had been required.
+    pub safe_exits: u32,
 }
 
 /// The result of a triskar2 run.
@@ -113,6 +122,11 @@ pub struct TriskarRun {
     /// With `module_dies_at`: the module table of the current sync master after every
     /// cycle, as decoded from its topic wire form.
     pub supervision: Vec<SupervisionSample>,
+    /// Sync frames on the wire: cycles with two syncs, longest silence.
+    pub syncs: crate::sync_watch::SyncWatch,
+    /// Frames outside their slots or windows as the last sync on the wire places them,
+    /// whoever sent it (`sync_watch::SlotCheck`), and frames so checked.
+    pub slots_live: (u64, u64),
     pub config: TriskarConfig,
 }
 
@@ -218,6 +232,12 @@ fn supervise(bus: &Bus<Box<dyn TriskarModule>>, t: Nanos) -> Option<SupervisionS
     Some(SupervisionSample { t_ns: t, table })
 }
 
+/// Time from a slot boundary of the master's clock to its sync's start of frame: the
+/// timer interrupt latency (without a CPU model; with one, the modelled entry).
+fn sync_lead_ns(sim: &SimConfig) -> Nanos {
+    sim.node_irq_latency_ns()
+}
+
 fn s_to_ns(s: f64) -> Nanos {
     (s.max(0.0) * 1e9) as Nanos
 }
@@ -241,11 +261,39 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
     }))
 }
 
-/// The six modules on a fresh bus, each with its firmware's generated filters.
+/// Every scripted fault of `cfg`: `faults`, plus `gateway_dies_at_s` and
+/// `module_dies_at` as `Dies` faults; checked (a script that cannot happen is an error).
+pub fn fault_script(cfg: &TriskarConfig) -> Result<Vec<crate::fault::Fault>, String> {
+    use crate::fault::{Fault, FaultKind};
+    let mut faults = cfg.faults.clone();
+    let dies = |module, at| Fault {
+        module,
+        kind: FaultKind::Dies,
+        at: s_to_ns(at),
+    };
+    faults.extend(cfg.gateway_dies_at_s.map(|at| dies(0, at)));
+    faults.extend(cfg.module_dies_at.map(|(m, at)| dies(m, at)));
+    if let Some(f) = faults.iter().find(|f| f.module >= MODULES.len()) {
+        return Err(format!(
+            "no module {} (modules: {})",
+            f.module,
+            MODULES.join(", ")
+        ));
+    }
+    for n in 0..MODULES.len() {
+        crate::fault::down_intervals(&faults, n)
+            .map_err(|e| format!("{}: {e}", MODULES.get(n).unwrap_or(&"?")))?;
+    }
+    Ok(faults)
+}
+
+/// The six modules on a fresh bus, each with its firmware's generated filters and the
+/// faults of `cfg` (`fault_script`).
 pub(crate) fn build_bus(
     cfg: &TriskarConfig,
     shared: &Rc<RefCell<Shared>>,
-) -> Bus<Box<dyn TriskarModule>> {
+) -> Result<Bus<Box<dyn TriskarModule>>, String> {
+    let faults = fault_script(cfg)?;
     let bitrate = robot::BUS.bitrate;
     let mut bus: Bus<Box<dyn TriskarModule>> =
         Bus::new(bitrate, cfg.sim.bit_error_rate, cfg.sim.seed);
@@ -254,79 +302,68 @@ pub(crate) fn build_bus(
         let clock = cfg.sim.clock(n);
         let now = clock.local(0);
         let sh = shared.clone();
-        let mut m: Box<dyn TriskarModule> = match n {
-            0 => {
+        // One arm per module: the generated engine, host, statics and the module's app,
+        // and how to boot them again (a module that returns after a fault).
+        macro_rules! module {
+            ($m:ident, $name:literal, $app:expr, $srt:expr) => {{
                 let mut m = SimModule::new(
-                    "gateway",
-                    robot::gateway::engine(now),
-                    robot::gateway::host(),
-                    App::Gateway(app::GatewayApp::new()),
-                    &robot::gateway::STATUS,
+                    $name,
+                    robot::$m::engine(now),
+                    robot::$m::host(),
+                    $app,
+                    &robot::$m::STATUS,
                     clock,
                     sh,
-                    vec![(robot::gateway::topics::tx::TELEOP, || {
-                        robot::gateway::topics::TELEOP.stats()
-                    })],
+                    $srt,
                 );
-                m.dies_at = cfg.gateway_dies_at_s.map(s_to_ns);
+                m.boot = Some(Boot {
+                    engine: robot::$m::engine,
+                    host: robot::$m::host,
+                    app: || $app,
+                    reset: robot::$m::reset,
+                });
+                m.down = crate::fault::down_intervals(&faults, n)?;
+                m.babble_from = crate::fault::babble_from(&faults, n);
                 Box::new(m)
-            }
-            1 => Box::new(SimModule::new(
+            }};
+        }
+        let m: Box<dyn TriskarModule> = match n {
+            0 => module!(
+                gateway,
+                "gateway",
+                App::Gateway(app::GatewayApp::new()),
+                vec![(robot::gateway::topics::tx::TELEOP, || {
+                    robot::gateway::topics::TELEOP.stats()
+                })]
+            ),
+            1 => module!(
+                motor1,
                 "motor1",
-                robot::motor1::engine(now),
-                robot::motor1::host(),
                 App::Motor1(app::Motor1App::new()),
-                &robot::motor1::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
-            2 => Box::new(SimModule::new(
+                Vec::new()
+            ),
+            2 => module!(
+                motor2,
                 "motor2",
-                robot::motor2::engine(now),
-                robot::motor2::host(),
                 App::Motor2(app::Motor2App::new()),
-                &robot::motor2::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
-            3 => Box::new(SimModule::new(
+                Vec::new()
+            ),
+            3 => module!(
+                motor3,
                 "motor3",
-                robot::motor3::engine(now),
-                robot::motor3::host(),
                 App::Motor3(app::Motor3App::new()),
-                &robot::motor3::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
-            4 => Box::new(SimModule::new(
+                Vec::new()
+            ),
+            4 => module!(
+                proximity,
                 "proximity",
-                robot::proximity::engine(now),
-                robot::proximity::host(),
                 App::Proximity(app::ProximityApp::new()),
-                &robot::proximity::STATUS,
-                clock,
-                sh,
                 vec![(robot::proximity::topics::tx::VELOCITY, || {
                     robot::proximity::topics::VELOCITY.stats()
-                })],
-            )),
-            _ => Box::new(SimModule::new(
-                "psu",
-                robot::psu::engine(now),
-                robot::psu::host(),
-                App::Psu(app::PsuApp::new()),
-                &robot::psu::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
+                })]
+            ),
+            _ => module!(psu, "psu", App::Psu(app::PsuApp::new()), Vec::new()),
         };
-        if let Some((_, at)) = cfg.module_dies_at.filter(|&(k, _)| k == n) {
-            m.set_dies_at(Some(s_to_ns(at)));
-        }
         let filters = match n {
             0 => robot::gateway::FILTERS,
             1 => robot::motor1::FILTERS,
@@ -346,17 +383,30 @@ pub(crate) fn build_bus(
             },
         );
     }
-    bus
+    Ok(bus)
 }
 
 fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
     let shared = new_shared(cfg);
-    let mut bus = build_bus(cfg, &shared);
+    let mut bus = build_bus(cfg, &shared)?;
+    let faults = fault_script(cfg)?;
     let end = cfg.sim.end_ns();
     let win = window(&cfg.sim);
     let mut meter = Meter::new(&sc.topics, win, bus.bit_ns());
     let mut srt = SrtMatcher::new(&sc.topics, win);
-    let until = cfg.gateway_dies_at_s.map_or(Nanos::MAX, s_to_ns);
+    // The slot check on the configured master's clock: only until it first fails.
+    let until = faults
+        .iter()
+        .filter(|f| f.module == sc.master)
+        .map(|f| f.at)
+        .min()
+        .unwrap_or(Nanos::MAX);
+    let mut syncs = crate::sync_watch::SyncWatch::new(sc.bus().map_or(0, |b| b.cycle_ns()));
+    // The same check anchored on the wire, whoever the master: the sync leaves one timer
+    // interrupt latency into slot 0.
+    let mut live = sc.bus().map(|b| {
+        crate::sync_watch::SlotCheck::new(b.slot_ns, b.slots_per_cycle, sync_lead_ns(&cfg.sim))
+    });
     let mut log = match &cfg.sim.wire_log {
         Some(p) => Some((
             std::io::BufWriter::new(
@@ -385,6 +435,10 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         for w in &bus.wire {
             meter.frame(w);
             srt.frame(w);
+            syncs.frame(w);
+            if let Some(c) = &mut live {
+                c.frame(w);
+            }
         }
         for n in 0..bus.len() {
             if let Some(m) = bus.module_mut(n) {
@@ -437,8 +491,12 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             safe_reason: m.status().safe_reason(),
             sync_master: m.status().sync_master(),
             motor: m.app().motor(),
+            master: m.is_master(),
+            reboots: m.reboots(),
+            safe_exits: m.safe_exits(),
         });
     }
+    syncs.finish(end);
     let mut figures = meter.finish();
     figures.srt = srt.finish();
     let mut sh = shared.borrow_mut();
@@ -475,6 +533,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         ),
         modules,
         supervision,
+        syncs,
+        slots_live: live.map_or((0, 0), |c| (c.bad, c.checked)),
         config: cfg.clone(),
     })
 }
