@@ -98,6 +98,8 @@ pub struct Request {
     pub master_dies_at: Option<f64>,
     /// Scripted faults, `MODULE:KIND@TIME` (`fault::parse`; triskar2 only).
     pub faults: Vec<String>,
+    /// Run the fault campaign (`campaign`) instead: every case for `cfg.seconds`.
+    pub campaign: bool,
 }
 
 /// Simulated time against the time it took.
@@ -171,6 +173,13 @@ pub enum Report {
         /// Notes for the user (why this scenario ran).
         notes: Vec<String>,
     },
+    /// The fault campaign (`campaign::cases`), one row per case.
+    Campaign {
+        /// The rows, in case order.
+        rows: Vec<crate::campaign::Row>,
+        /// Every case, wall and CPU seconds.
+        speed: Speed,
+    },
     /// The Triskar2 robot.
     Triskar {
         /// The robot file.
@@ -210,8 +219,46 @@ fn run_plan(
     })
 }
 
-/// Runs `req`; `progress(done, total)` hears about each finished sweep point.
+/// The fault campaign on the workspace robot at `path` (`Request::campaign`).
+fn run_campaign(
+    req: &Request,
+    path: &Path,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Report, String> {
+    if req.sweep
+        || req.master_dies_at.is_some()
+        || !req.faults.is_empty()
+        || req.cfg.load != 1.0
+        || req.cfg.bit_error_rate != 0.0
+        || req.cfg.wire_log.is_some()
+    {
+        return Err(
+            "--campaign runs the workspace robot with its own faults: it takes only \
+             [robot.toml] [--seconds N] [--seed S] [--json] and the --cpu options"
+                .into(),
+        );
+    }
+    let plan = load(path)?;
+    triskar::check_plan(&plan).map_err(|why| format!("--campaign: {why}"))?;
+    let n = crate::campaign::cases().len() as f64;
+    let (rows, speed) = timed(req.cfg.seconds * n, || {
+        crate::campaign::run(&plan, &req.cfg, progress)
+    })?;
+    Ok(Report::Campaign { rows, speed })
+}
+
+/// Runs `req`; `progress(done, total)` hears about each finished sweep point (or
+/// campaign case).
 pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Report, String> {
+    if req.campaign {
+        return match &req.which {
+            Which::Triskar { robot, .. } => run_campaign(req, robot, progress),
+            _ => Err(
+                "--campaign runs the workspace robot (triskar2 and rtcan-paper): drop --scenario"
+                    .into(),
+            ),
+        };
+    }
     if let Some(at) = req.master_dies_at {
         if !(at.is_finite() && at >= 0.0) {
             return Err(format!(
@@ -341,6 +388,7 @@ mod tests {
             sweep: false,
             master_dies_at: None,
             faults: Vec::new(),
+            campaign: false,
         }
     }
 
@@ -414,6 +462,7 @@ mod load_tests {
             sweep: false,
             master_dies_at: None,
             faults: Vec::new(),
+            campaign: false,
         };
         let one = events(&run(&r, &mut |_, _| {}).unwrap());
         r.cfg.load = 0.5;
