@@ -24,6 +24,17 @@
 //!   counted at each start of frame; level changes reach the module as
 //!   `Module::error_state`; on an idle bus the recovery completes after exactly
 //!   1408 recessive bit times (an `IdleRecover` bus event).
+//! - Errors seen by some receivers only (optional, `set_eof_error_rate`): a receiver
+//!   that alone sees an error in the last-but-one bit of EOF rejects the frame and sends
+//!   an error flag in the last bit, which the other receivers ignore (they already
+//!   accepted it) and the transmitter takes as an error: it retransmits, and those
+//!   receivers get the frame twice (inconsistent duplication; omission if the
+//!   transmitter fails before the retransmission). `WireFrame::partial`.
+//! - Faults on the bus (`fault.rs`, applied by the scenario at their times): a node
+//!   holding the bus dominant (`set_stuck`), a node cut off on its stub
+//!   (`set_partitioned`), a node whose interrupts are masked (`stall`: its FIFOs
+//!   overrun), a node whose clock jumps (`step_clock`), and per node a bus guardian
+//!   (`set_guardian`, `guardian.rs`).
 //! - Receive and transmit interrupts, and timer wake-ups, run `irq_latency_ns` after the
 //!   hardware event. Start-of-frame timestamps are taken by hardware, without latency,
 //!   in the receiver's local clock.
@@ -121,8 +132,12 @@ pub struct WireFrame {
     pub node: usize,
     /// The frame.
     pub frame: Frame,
-    /// False when destroyed by an error frame.
+    /// False when destroyed by an error frame (or retransmitted after a per-receiver
+    /// error in the last bit of EOF, see `partial`).
     pub ok: bool,
+    /// Accepted by some receivers but rejected by others after an error in the
+    /// last-but-one bit of EOF; the transmitter retransmits it (`ok` is false).
+    pub partial: bool,
 }
 
 /// Bus-wide counters.
@@ -138,6 +153,9 @@ pub struct BusStats {
     pub id_collisions: u64,
     /// Time the bus was not idle (frames, error frames, intermissions), ns.
     pub busy_ns: Nanos,
+    /// Frames some receivers accepted and others rejected (error in the last-but-one
+    /// bit of EOF), then retransmitted.
+    pub eof_errors: u64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -183,6 +201,8 @@ enum State {
         sof: Nanos,
         frame: Frame,
         ok: bool,
+        /// Receivers (bit per node) that saw an error in the last-but-one bit of EOF.
+        rejects: u64,
     },
 }
 
@@ -225,6 +245,12 @@ struct Node<M> {
     last_req: Option<(Nanos, Nanos)>,
     /// The modelled CPU and the key of its next event.
     cpu: Option<(Cpu, Key)>,
+    /// Interrupts are masked until this global time (`stall`).
+    stalled_until: Nanos,
+    /// Cut off from the bus (`set_partitioned`).
+    partitioned: bool,
+    /// Its bus guardian, if it has one.
+    guardian: Option<crate::guardian::Guardian>,
 }
 
 /// The simulated bus with its nodes.
@@ -256,6 +282,16 @@ pub struct Bus<M: Module> {
     /// Recessive bits before the start of frame being arbitrated (trailing bits of the
     /// last frame and idle time): what bus-off controllers count towards recovery.
     recessive_run: u64,
+    /// The node whose transceiver holds the bus dominant (`set_stuck`).
+    stuck: Option<usize>,
+    /// Per receiver and frame, probability of an error it alone sees in the last-but-one
+    /// bit of EOF.
+    eof_error_rate: f64,
+}
+
+/// The node may start a frame: not bus-off, not cut off, not stopped by its guardian.
+fn transmits<M>(n: &Node<M>) -> bool {
+    !n.can.conf.is_bus_off() && !n.partitioned && n.guardian.as_ref().is_none_or(|g| !g.is_tripped())
 }
 
 fn result_code(r: TxResult) -> u8 {
@@ -295,7 +331,130 @@ impl<M: Module> Bus<M> {
             offers: Vec::new(),
             irqs: Vec::new(),
             recessive_run: 0,
+            stuck: None,
+            eof_error_rate: 0.0,
         }
+    }
+
+    /// Per receiver and frame, the probability that this receiver alone sees an error in
+    /// the last-but-one bit of EOF (0 = never; the bit error rate is a good value).
+    pub fn set_eof_error_rate(&mut self, p: f64) {
+        self.eof_error_rate = p;
+    }
+
+    /// Gives node `i` a bus guardian (`guardian.rs`).
+    pub fn set_guardian(&mut self, i: usize, g: crate::guardian::Guardian) {
+        if let Some(node) = self.nodes.get_mut(i) {
+            node.guardian = Some(g);
+        }
+    }
+
+    /// Node `i`'s bus guardian.
+    pub fn guardian(&self, i: usize) -> Option<&crate::guardian::Guardian> {
+        self.nodes.get(i).and_then(|n| n.guardian.as_ref())
+    }
+
+    /// Node `i`'s transceiver holds the bus dominant from now (`on`), or lets it go. While
+    /// it does, no frame starts and the frame on the wire is destroyed; every controller
+    /// sees dominant bits after its error flag: REC +8 per 8 bits (error-passive at
+    /// once on the scale of a cycle), the transmitter of that frame TEC +8 per 8 bits
+    /// (bus-off). Released, the bus is idle (recessive) from now.
+    pub fn set_stuck(&mut self, i: usize, on: bool) {
+        if !on {
+            if self.stuck == Some(i) {
+                self.stuck = None;
+                if let State::Idle { from } = self.state {
+                    self.state = State::Idle {
+                        from: from.max(self.now),
+                    };
+                }
+                self.maybe_start_arbitration();
+            }
+            return;
+        }
+        self.stuck = Some(i);
+        let tx = match &mut self.state {
+            State::Busy { node, ok, .. } => {
+                *ok = false;
+                Some(*node)
+            }
+            _ => None,
+        };
+        let now = self.now;
+        for n in 0..self.nodes.len() {
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
+            let level = node.can.conf.level();
+            node.can.conf.stuck_dominant(tx == Some(n));
+            if node.can.conf.level() != level {
+                let t = now + node.setup.irq_latency_ns;
+                self.push_irq(n, t, Ev::ErrIrq { node: n });
+            }
+        }
+    }
+
+    /// Node `i` is cut off from the bus (`on`) or joins it again. Cut off, it neither
+    /// receives nor takes part in arbitration; alone on its stub its frames would get
+    /// no acknowledgement: TEC rises to error-passive and stays there (ISO 11898-1: an
+    /// error-passive transmitter does not count acknowledgement errors).
+    pub fn set_partitioned(&mut self, i: usize, on: bool) {
+        let now = self.now;
+        let Some(node) = self.nodes.get_mut(i) else {
+            return;
+        };
+        node.partitioned = on;
+        if on {
+            let level = node.can.conf.level();
+            node.can.conf.unacknowledged();
+            if node.can.conf.level() != level {
+                let t = now + node.setup.irq_latency_ns;
+                self.push_irq(i, t, Ev::ErrIrq { node: i });
+            }
+        } else {
+            self.maybe_start_arbitration();
+        }
+    }
+
+    /// Node `i`'s interrupts (timer, receive, transmit, status) are masked until global
+    /// time `until`: they run then. Frames keep arriving in its FIFOs, which overrun.
+    pub fn stall(&mut self, i: usize, until: Nanos) {
+        if let Some(node) = self.nodes.get_mut(i) {
+            node.stalled_until = node.stalled_until.max(until);
+        }
+    }
+
+    /// Node `i`'s local clock jumps by `delta_ns` now (its offset changes; an offset
+    /// cannot go below zero, so a backward step larger than the offset is cut short).
+    /// Its armed timer fires at the same local time, now at another global time.
+    /// Returns the new clock.
+    pub fn step_clock(&mut self, i: usize, delta_ns: i64) -> Option<NodeClock> {
+        let now = self.now;
+        let node = self.nodes.get_mut(i)?;
+        let c = &mut node.setup.clock;
+        c.offset_ns = if delta_ns >= 0 {
+            c.offset_ns.saturating_add(delta_ns.unsigned_abs())
+        } else {
+            c.offset_ns.saturating_sub(delta_ns.unsigned_abs())
+        };
+        let clock = node.setup.clock;
+        let lat = node.setup.irq_latency_ns;
+        let rearm = match (node.wake, node.last_req) {
+            (Some(_), Some((l, _))) => {
+                let g = clock.global_at(l);
+                node.last_req = Some((l, g));
+                Some(g.saturating_add(lat).max(now))
+            }
+            _ => {
+                node.last_req = None;
+                None
+            }
+        };
+        if let Some(t) = rearm {
+            let k = key(t, self.next_seq());
+            self.set_wake(i, Some(k));
+        }
+        Some(clock)
     }
 
     /// Changes the bit error rate from now on (a campaign's noise burst).
@@ -315,6 +474,9 @@ impl<M: Module> Bus<M> {
             irqs: VecDeque::new(),
             last_req: None,
             cpu,
+            stalled_until: 0,
+            partitioned: false,
+            guardian: None,
         });
         // Place 1 + i of node i fits the key's PLACE_BITS for any real bus: module indices
         // are 8-bit.
@@ -406,8 +568,15 @@ impl<M: Module> Bus<M> {
     fn push_irq(&mut self, n: usize, t: Nanos, ev: Ev) {
         let seq = self.next_seq();
         if let Some(node) = self.nodes.get_mut(n) {
-            debug_assert!(node.irqs.back().is_none_or(|&(b, _)| key_time(b) <= t));
-            node.irqs.push_back((key(t, seq), ev));
+            // Appending keeps the order (fixed latency), except for interrupts a stall
+            // deferred: those go in their place.
+            let k = key(t, seq);
+            let at = node
+                .irqs
+                .iter()
+                .rposition(|&(b, _)| b <= k)
+                .map_or(0, |p| p + 1);
+            node.irqs.insert(at, (k, ev));
         }
         self.refresh_key(n);
     }
@@ -527,12 +696,16 @@ impl<M: Module> Bus<M> {
     }
 
     fn maybe_start_arbitration(&mut self) {
+        if self.stuck.is_some() {
+            // A dominant bus never becomes idle: nothing starts, nothing recovers.
+            return;
+        }
         if let State::Idle { from } = self.state {
-            // A bus-off controller's loaded mailboxes start nothing.
+            // A bus-off, cut-off or guarded-off controller's loaded mailboxes start nothing.
             if self
                 .nodes
                 .iter()
-                .any(|n| n.can.has_pending() && !n.can.conf.is_bus_off())
+                .any(|n| n.can.has_pending() && transmits(n))
             {
                 // A pending idle-recovery check gives way: the start of frame counts
                 // the recessive run for every bus-off controller.
@@ -577,6 +750,9 @@ impl<M: Module> Bus<M> {
         let State::Idle { from } = self.state else {
             return;
         };
+        if self.stuck.is_some() {
+            return;
+        }
         let idle = self.now.saturating_sub(from) / self.bit_ns().max(1);
         let run = crate::confinement::TRAILING_RECESSIVE_BITS + idle;
         for n in 0..self.nodes.len() {
@@ -622,6 +798,25 @@ impl<M: Module> Bus<M> {
 
     fn handle(&mut self, ev: Ev) {
         let now = self.now;
+        // A stalled node (interrupts masked) takes its interrupts when the stall ends.
+        if let Some(n) = match ev {
+            Ev::Wake { node }
+            | Ev::RxIrq { node, .. }
+            | Ev::TxIrq { node, .. }
+            | Ev::ErrIrq { node } => Some(node),
+            _ => None,
+        } {
+            let until = self.nodes.get(n).map_or(0, |x| x.stalled_until);
+            if now < until {
+                if let Ev::Wake { .. } = ev {
+                    let k = key(until, self.next_seq());
+                    self.set_wake(n, Some(k));
+                } else {
+                    self.push_irq(n, until, ev);
+                }
+                return;
+            }
+        }
         // With a modelled CPU, interrupts become jobs on it; their effects come back as
         // `Ev::Cpu` when the modelled execution reaches them.
         if let Some(n) = match ev {
@@ -757,15 +952,22 @@ impl<M: Module> Bus<M> {
         let State::Arbitrating { sof } = self.state else {
             return;
         };
+        if self.stuck.is_some() {
+            self.state = State::Idle { from: self.now };
+            return;
+        }
+        let now = self.now;
         // Reused buffer: this runs once per frame and must not allocate.
         let mut offers = std::mem::take(&mut self.offers);
         offers.clear();
-        // A bus-off controller does not transmit.
-        offers.extend(self.nodes.iter().enumerate().filter_map(|(n, node)| {
-            (!node.can.conf.is_bus_off()).then_some(())?;
-            node.can
-                .best_pending()
-                .map(|(mb, p)| (p.frame.id().raw(), n, mb))
+        // A bus-off or cut-off controller does not transmit; a guardian may stop it.
+        offers.extend(self.nodes.iter_mut().enumerate().filter_map(|(n, node)| {
+            transmits(node).then_some(())?;
+            let (mb, p) = node.can.best_pending()?;
+            if let Some(g) = node.guardian.as_mut() {
+                g.admit(now, p.frame.id()).then_some(())?;
+            }
+            Some((p.frame.id().raw(), n, mb))
         }));
         // The start of frame ended the recessive run: a controller that recovers with it
         // joins only the next arbitration.
@@ -809,6 +1011,9 @@ impl<M: Module> Bus<M> {
         let Some(p) = node.can.mailbox(win_mb) else {
             return;
         };
+        if let Some(g) = node.guardian.as_mut() {
+            g.sent();
+        }
         node.can.on_wire = Some(win_mb);
         let bits = exact_bits(&p.frame);
         let body = bits - INTERMISSION_BITS;
@@ -822,12 +1027,30 @@ impl<M: Module> Bus<M> {
                 end_bits = k + ERROR_FRAME_BITS;
             }
         }
+        let mut rejects = 0u64;
+        if ok && self.eof_error_rate > 0.0 {
+            for (n, node) in self.nodes.iter().enumerate() {
+                if n != win_node
+                    && n < 64
+                    && !node.partitioned
+                    && !node.can.conf.is_bus_off()
+                    && self.rng.unit() < self.eof_error_rate
+                {
+                    rejects |= 1 << n;
+                }
+            }
+            if rejects != 0 {
+                // The error flag starts in the last bit of EOF.
+                end_bits = body - 1 + ERROR_FRAME_BITS;
+            }
+        }
         self.state = State::Busy {
             node: win_node,
             mb: win_mb,
             sof,
             frame: p.frame,
             ok,
+            rejects,
         };
         let t = sof + bits_to_ns(end_bits, self.bitrate);
         self.push_bus(t, Ev::FrameEnd);
@@ -839,11 +1062,15 @@ impl<M: Module> Bus<M> {
             mb,
             sof,
             frame,
-            ok,
+            ok: rx_ok,
+            rejects,
         } = self.state
         else {
             return;
         };
+        // Receivers outside `rejects` accept a frame that is good up to the last-but-one
+        // bit of EOF; the transmitter needs the whole EOF.
+        let ok = rx_ok && rejects == 0;
         let now = self.now;
         let ifs = bits_to_ns(INTERMISSION_BITS, self.bitrate);
         self.stats.busy_ns += now - sof + ifs;
@@ -854,6 +1081,7 @@ impl<M: Module> Bus<M> {
                 node: tx,
                 frame,
                 ok,
+                partial: rx_ok && !ok,
             });
         }
         let mut irqs = std::mem::take(&mut self.irqs);
@@ -897,8 +1125,11 @@ impl<M: Module> Bus<M> {
         }
         // Every receiver on the bus counts the frame, whatever its filters.
         for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
+            if node.partitioned {
+                continue;
+            }
             let level = node.can.conf.level();
-            if ok {
+            if rx_ok && rejects & (1u64 << n.min(63)) == 0 {
                 node.can.conf.rx_ok();
             } else {
                 node.can.conf.rx_error();
@@ -907,11 +1138,19 @@ impl<M: Module> Bus<M> {
                 irqs.push((now + node.setup.irq_latency_ns, Ev::ErrIrq { node: n }));
             }
         }
-        if ok {
-            self.stats.frames_ok += 1;
+        if !ok && rx_ok {
+            self.stats.eof_errors += 1;
+        }
+        if rx_ok {
+            if ok {
+                self.stats.frames_ok += 1;
+            }
             let mut overruns = Vec::new();
             for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
-                if node.can.conf.is_bus_off() {
+                if node.can.conf.is_bus_off()
+                    || node.partitioned
+                    || (n < 64 && rejects & (1u64 << n) != 0)
+                {
                     continue;
                 }
                 let Some(fifo) = node.can.filter.fifo_for(frame.id().raw()) else {

@@ -71,6 +71,31 @@ impl Confinement {
         }
     }
 
+    /// The bus is held dominant (a stuck transceiver): after its error flag the
+    /// controller keeps seeing dominant bits, REC +8 per 8 (8-bit in bxCAN: it ends at
+    /// 255, error-passive), and if it was transmitting TEC +8 per 8: bus-off.
+    pub fn stuck_dominant(&mut self, transmitting: bool) {
+        if self.bus_off {
+            return;
+        }
+        self.rec = 255;
+        if transmitting {
+            self.tec = BUS_OFF_TEC + 1;
+            self.bus_off = true;
+            self.runs = 0;
+            self.bus_off_entries += 1;
+        }
+    }
+
+    /// Alone on a cut stub: its frames get no acknowledgement, TEC +8 each until
+    /// error-passive, where acknowledgement errors no longer count (ISO 11898-1 §12.1.4.2
+    /// exception): TEC ends at 128 or above.
+    pub fn unacknowledged(&mut self) {
+        if !self.bus_off {
+            self.tec = self.tec.max(128);
+        }
+    }
+
     /// This controller's frame was sent and acknowledged.
     pub fn tx_ok(&mut self) {
         if !self.bus_off {

@@ -1,7 +1,8 @@
 //! Scripted faults: what happens to which module when, as `rtcan sim --fault` and the
 //! campaign give them (`motor2:reset@3.2s`, `gateway:dies@2s`, `gateway:returns@5s`,
-//! ...). Parsing is strict: an unknown module, kind or time is an
-//! error naming the accepted forms, never a fault silently ignored.
+//! `motor3:stuck@1s`, `motor2:stall=5ms@3s`, `psu:step=-1ms@2s`, ...). Parsing is
+//! strict: an unknown module, kind, argument or time is an error naming the accepted
+//! forms, never a fault silently ignored.
 use rtcan_core::Nanos;
 
 /// What happens to a module.
@@ -17,8 +18,28 @@ pub enum FaultKind {
     Reset,
     /// A babbling idiot: the module's software stops following the schedule and keeps
     /// every transmit mailbox loaded with a top-priority data frame (`BABBLE_RAW`), so
-    /// its controller floods the bus at line rate. No bus guardian.
+    /// its controller floods the bus at line rate (stopped only by a bus guardian,
+    /// `guardian.rs`, if the run has one).
     Babble,
+    /// The module's transceiver holds the bus dominant (a shorted TXD) until `Release`:
+    /// no frame can start; a frame on the wire is destroyed; every controller sees
+    /// dominant bits after its error flag (REC +8 per 8 bits: error-passive), the one
+    /// transmitting at that moment TEC +8 per 8 bits (bus-off).
+    Stuck,
+    /// Ends `Stuck`.
+    Release,
+    /// The module's bus stub is cut: it neither receives nor is heard until `Rejoin`;
+    /// alone on its stub its frames get no acknowledgement (TEC to error-passive).
+    Partition,
+    /// Ends `Partition`.
+    Rejoin,
+    /// The module's CPU runs with interrupts masked for this long (ns): its receive
+    /// FIFOs fill and overrun (FIFO-locked mode, RFLM = 1, as the firmware configures),
+    /// its timer and transmit interrupts wait.
+    Stall(Nanos),
+    /// The module's local clock jumps by this many ns (a time base corrected by
+    /// software, a counter glitch): +1 ms, -1 ms.
+    Step(i64),
 }
 
 /// Identifier of the babbling idiot's frames: laxity 0 and the first message ID above
@@ -38,7 +59,7 @@ pub struct Fault {
 
 /// The accepted forms, for error messages and `--help`.
 pub const FORMS: &str =
-    "MODULE:dies@T, MODULE:returns@T, MODULE:reset@T, MODULE:babble@T (T: a number with unit s, ms or us, e.g. 3.2s)";
+    "MODULE:dies@T, MODULE:returns@T, MODULE:reset@T, MODULE:babble@T, MODULE:stuck@T, MODULE:release@T, MODULE:partition@T, MODULE:rejoin@T, MODULE:stall=D@T, MODULE:step=+D@T or step=-D@T (T, D: a number with unit s, ms or us, e.g. 3.2s)";
 
 /// A duration such as `3.2s`, `1ms`, `250us` in ns.
 pub fn parse_duration(s: &str) -> Result<Nanos, String> {
@@ -76,12 +97,46 @@ pub fn parse(spec: &str, modules: &[&str]) -> Result<Fault, String> {
         ))
     })?;
     let at = parse_duration(at).map_err(bad)?;
-    let kind = match kind {
-        "dies" => FaultKind::Dies,
-        "returns" => FaultKind::Returns,
-        "reset" => FaultKind::Reset,
-        "babble" => FaultKind::Babble,
-        k => return Err(bad(format!("unknown fault `{k}`"))),
+    let (kind, arg) = match kind.split_once('=') {
+        Some((k, a)) => (k, Some(a)),
+        None => (kind, None),
+    };
+    let kind = match (kind, arg) {
+        ("dies", None) => FaultKind::Dies,
+        ("returns", None) => FaultKind::Returns,
+        ("reset", None) => FaultKind::Reset,
+        ("babble", None) => FaultKind::Babble,
+        ("stuck", None) => FaultKind::Stuck,
+        ("release", None) => FaultKind::Release,
+        ("partition", None) => FaultKind::Partition,
+        ("rejoin", None) => FaultKind::Rejoin,
+        ("stall", Some(d)) => {
+            let d = parse_duration(d).map_err(bad)?;
+            if d == 0 {
+                return Err(bad("a stall of 0".into()));
+            }
+            FaultKind::Stall(d)
+        }
+        ("step", Some(d)) => {
+            let (sign, mag) = match d.as_bytes().first() {
+                Some(b'+') => (1, d.get(1..).unwrap_or("")),
+                Some(b'-') => (-1, d.get(1..).unwrap_or("")),
+                _ => return Err(bad(format!("step `{d}` needs a sign (+1ms or -1ms)"))),
+            };
+            let m = parse_duration(mag).map_err(bad)?;
+            let m = i64::try_from(m)
+                .ok()
+                .filter(|&m| m > 0 && m <= 1_000_000_000)
+                .ok_or_else(|| bad(format!("step `{d}` must be within 1 ns and 1 s")))?;
+            FaultKind::Step(sign * m)
+        }
+        ("stall" | "step", None) => {
+            return Err(bad(format!("`{kind}` needs a duration, `{kind}=...`")))
+        }
+        (k, Some(_)) if !matches!(k, "stall" | "step") => {
+            return Err(bad(format!("`{k}` takes no `=` argument")))
+        }
+        (k, _) => return Err(bad(format!("unknown fault `{k}`"))),
     };
     Ok(Fault {
         module: m,
@@ -97,7 +152,13 @@ pub fn parse(spec: &str, modules: &[&str]) -> Result<Fault, String> {
 pub fn down_intervals(faults: &[Fault], module: usize) -> Result<Vec<(Nanos, Nanos)>, String> {
     let mut own: Vec<&Fault> = faults
         .iter()
-        .filter(|f| f.module == module && f.kind != FaultKind::Babble)
+        .filter(|f| {
+            f.module == module
+                && matches!(
+                    f.kind,
+                    FaultKind::Dies | FaultKind::Returns | FaultKind::Reset
+                )
+        })
         .collect();
     own.sort_by_key(|f| f.at);
     let mut out: Vec<(Nanos, Nanos)> = Vec::new();
@@ -123,12 +184,59 @@ pub fn down_intervals(faults: &[Fault], module: usize) -> Result<Vec<(Nanos, Nan
                     f.at as f64 / 1e9
                 ))
             }
-            // Filtered out above: babbling is not being down.
-            (FaultKind::Babble, _) => {}
+            // Filtered out above: the bus-level faults are not being down.
+            _ => {}
         }
     }
     if let Some(from) = down {
         out.push((from, Nanos::MAX));
+    }
+    Ok(out)
+}
+
+/// The bus-level faults (`Stuck` … `Step`) in time order; a `Release` without `Stuck`, a
+/// `Rejoin` without `Partition` (or a second one while in force) is an error.
+pub fn bus_actions(faults: &[Fault]) -> Result<Vec<Fault>, String> {
+    let mut out: Vec<Fault> = faults
+        .iter()
+        .filter(|f| {
+            matches!(
+                f.kind,
+                FaultKind::Stuck
+                    | FaultKind::Release
+                    | FaultKind::Partition
+                    | FaultKind::Rejoin
+                    | FaultKind::Stall(_)
+                    | FaultKind::Step(_)
+            )
+        })
+        .copied()
+        .collect();
+    out.sort_by_key(|f| f.at);
+    let mut stuck: Vec<usize> = Vec::new();
+    let mut cut: Vec<usize> = Vec::new();
+    for f in &out {
+        let t = f.at as f64 / 1e9;
+        let (set, on, name) = match f.kind {
+            FaultKind::Stuck => (&mut stuck, true, "stuck"),
+            FaultKind::Release => (&mut stuck, false, "stuck"),
+            FaultKind::Partition => (&mut cut, true, "partitioned"),
+            FaultKind::Rejoin => (&mut cut, false, "partitioned"),
+            _ => continue,
+        };
+        let was = set.contains(&f.module);
+        if was == on {
+            return Err(format!(
+                "module {} is {}{name} at {t:.3} s",
+                f.module,
+                if on { "already " } else { "not " }
+            ));
+        }
+        if on {
+            set.push(f.module);
+        } else {
+            set.retain(|&m| m != f.module);
+        }
     }
     Ok(out)
 }
@@ -181,10 +289,51 @@ mod tests {
             "gateway:dies@xs",
             "gateway:dies@1e300s",
             "gateway:step+1ms@1s",
+            "gateway:step=1ms@1s",
+            "gateway:step=+0ms@1s",
+            "gateway:step=+2s@1s",
+            "gateway:stall@1s",
+            "gateway:stall=0ms@1s",
+            "gateway:dies=1ms@1s",
+            "gateway:stuck=1ms@1s",
         ] {
             let e = parse(bad, &M).unwrap_err();
             assert!(e.contains(bad) && e.contains("accepted"), "{bad}: {e}");
         }
+    }
+
+    #[test]
+    fn parses_the_bus_level_faults() {
+        let k = |s: &str| parse(s, &M).map(|f| f.kind);
+        assert_eq!(k("motor1:stuck@1s"), Ok(FaultKind::Stuck));
+        assert_eq!(k("motor1:release@2s"), Ok(FaultKind::Release));
+        assert_eq!(k("motor2:partition@1s"), Ok(FaultKind::Partition));
+        assert_eq!(k("motor2:rejoin@1s"), Ok(FaultKind::Rejoin));
+        assert_eq!(k("motor2:stall=5ms@3s"), Ok(FaultKind::Stall(5_000_000)));
+        assert_eq!(k("motor2:step=+1ms@3s"), Ok(FaultKind::Step(1_000_000)));
+        assert_eq!(k("motor2:step=-1ms@3s"), Ok(FaultKind::Step(-1_000_000)));
+        let f = |s: &str| parse(s, &M).unwrap();
+        let a = bus_actions(&[
+            f("motor1:release@2s"),
+            f("motor2:step=-1ms@1s"),
+            f("motor1:stuck@1500ms"),
+            f("gateway:dies@1s"),
+        ])
+        .unwrap();
+        let kinds: Vec<_> = a.iter().map(|f| f.kind).collect();
+        assert_eq!(
+            kinds,
+            [
+                FaultKind::Step(-1_000_000),
+                FaultKind::Stuck,
+                FaultKind::Release
+            ]
+        );
+        assert!(bus_actions(&[f("motor1:release@2s")]).is_err());
+        assert!(bus_actions(&[f("motor1:partition@1s"), f("motor1:partition@2s")]).is_err());
+        assert!(bus_actions(&[f("motor1:rejoin@1s")]).is_err());
+        // Down intervals ignore them.
+        assert_eq!(down_intervals(&[f("motor1:stuck@1s")], 1), Ok(vec![]));
     }
 
     #[test]

@@ -24,6 +24,7 @@ pub mod decimate;
 pub mod decode;
 pub mod fault;
 pub mod fixed;
+pub mod guardian;
 pub mod histogram;
 pub mod ideal;
 pub mod live;

@@ -75,6 +75,7 @@ mod tests {
             node: 0,
             frame: Frame::from_parts(id, 0, [0; 8]).unwrap(),
             ok: true,
+            partial: false,
         }
     }
 
@@ -120,6 +121,7 @@ mod tests {
             )
             .unwrap(),
             ok,
+            partial: false,
         };
         let hrt = 0x0000_A000; // laxity 0, a topic
         let srt = 0x0800_A000; // laxity 1
