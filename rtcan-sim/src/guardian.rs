@@ -95,6 +95,37 @@ impl Guardian {
     }
 }
 
+/// One guardian per node of `sc`, from the robot's tables (rtcan-model): the node's
+/// topics, its heartbeat, the sync if `master_capable(node)`; budget per bus cycle =
+/// 2 x (HRT and window frames its topics can send in a cycle at their periods, plus one
+/// heartbeat and one sync) + 4, the margin for retransmissions after errors.
+pub fn for_scenario(
+    sc: &crate::run::Scenario,
+    master_capable: impl Fn(usize) -> bool,
+) -> Vec<Guardian> {
+    let cycle_ns = sc.bus().map_or(10_000_000, |b| b.cycle_ns()).max(1);
+    (0..sc.tables.len())
+        .map(|n| {
+            let mine = sc.topics.iter().filter(|t| t.node == n);
+            let mut owned: Vec<u16> = mine.clone().map(|t| t.msg_id.0).collect();
+            owned.extend(
+                u8::try_from(n)
+                    .ok()
+                    .and_then(rtcan_core::heartbeat::heartbeat_msg_id)
+                    .map(|m| m.0),
+            );
+            let frames: u64 = mine
+                .map(|t| {
+                    let per_cycle = cycle_ns.div_ceil(t.period_ns.max(1));
+                    rtcan_core::fragment::fragment_count(t.size) as u64 * per_cycle
+                })
+                .sum();
+            let budget = u32::try_from(2 * (frames + 2) + 4).unwrap_or(u32::MAX);
+            Guardian::new(owned, master_capable(n), budget, cycle_ns)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

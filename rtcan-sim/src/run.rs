@@ -39,6 +39,9 @@ pub struct SimConfig {
     /// Modelled CPU of every module (`None`: handlers take no time but
     /// `irq_latency_ns`; with a model the latency comes from it, `cpu.rs`).
     pub cpu: Option<crate::cpu::CpuModel>,
+    /// Per receiver and frame, probability of an error only it sees in the last-but-one
+    /// bit of EOF (`Bus::set_eof_error_rate`; 0 = none).
+    pub eof_error_rate: f64,
 }
 
 impl Default for SimConfig {
@@ -53,6 +56,7 @@ impl Default for SimConfig {
             record_wire: true,
             wire_log: None,
             cpu: None,
+            eof_error_rate: 0.0,
         }
     }
 }
@@ -258,6 +262,7 @@ fn run_bus<'t, M: Module>(
 ) -> Result<Run, String> {
     let bitrate = sc.bus().map_or(1_000_000, |b| b.bitrate);
     let mut bus = Bus::new(bitrate, cfg.bit_error_rate, cfg.seed);
+    bus.set_eof_error_rate(cfg.eof_error_rate);
     for (n, t) in sc.tables.iter().enumerate() {
         let clock = cfg.clock(n);
         let gens = sc.gens.get(n).map_or(&[][..], Vec::as_slice);

@@ -53,6 +53,8 @@ pub struct TriskarConfig {
     pub module_dies_at: Option<(usize, f64)>,
     /// Scripted faults (`fault::parse`, `--fault`), on top of the two above.
     pub faults: Vec<crate::fault::Fault>,
+    /// Every module has a bus guardian (`guardian.rs`).
+    pub guardian: bool,
 }
 
 impl Default for TriskarConfig {
@@ -69,6 +71,7 @@ impl Default for TriskarConfig {
             gateway_dies_at_s: None,
             module_dies_at: None,
             faults: Vec::new(),
+            guardian: false,
         }
     }
 }
@@ -93,6 +96,14 @@ pub struct ModuleReport {
     pub reboots: u32,
     /// Times the module left the safe state after it had been required.
     pub safe_exits: u32,
+    /// Global times of its first safe-state entry and of its last exit.
+    pub safe_times: (Option<Nanos>, Option<Nanos>),
+    /// Fault confinement at the end and bus-off entries of its controller.
+    pub error_state: rtcan_core::confinement::ErrorState,
+    /// Frames its controller lost to full receive FIFOs.
+    pub fifo_overruns: u64,
+    /// Its bus guardian cut it off (global time), if it has one and did.
+    pub guardian_cut_at: Option<Nanos>,
 }
 
 /// The result of a triskar2 run.
@@ -230,6 +241,47 @@ fn supervise(bus: &Bus<Box<dyn TriskarModule>>, t: Nanos) -> Option<SupervisionS
     let n = table.encode(&mut wire)?;
     let table = ModuleTable::decode(wire.get(..n)?)?;
     Some(SupervisionSample { t_ns: t, table })
+}
+
+/// Which modules may send the sync: the configured master and the backups.
+fn master_capable() -> [bool; MODULES.len()] {
+    let ranks = [
+        robot::gateway::BACKUP_RANK,
+        robot::motor1::BACKUP_RANK,
+        robot::motor2::BACKUP_RANK,
+        robot::motor3::BACKUP_RANK,
+        robot::proximity::BACKUP_RANK,
+        robot::psu::BACKUP_RANK,
+    ];
+    let mut out = [false; MODULES.len()];
+    for (n, o) in out.iter_mut().enumerate() {
+        *o = n == usize::from(robot::MASTER) || ranks.get(n).is_some_and(|&r| r > 0);
+    }
+    out
+}
+
+/// Applies one bus-level fault (`fault::bus_actions`) now.
+fn apply_bus_fault(bus: &mut Bus<Box<dyn TriskarModule>>, f: &crate::fault::Fault) {
+    use crate::fault::FaultKind;
+    let m = f.module;
+    match f.kind {
+        FaultKind::Stuck => bus.set_stuck(m, true),
+        FaultKind::Release => bus.set_stuck(m, false),
+        FaultKind::Partition => bus.set_partitioned(m, true),
+        FaultKind::Rejoin => bus.set_partitioned(m, false),
+        FaultKind::Stall(d) => bus.stall(m, f.at.saturating_add(d)),
+        FaultKind::Step(d) => {
+            if let Some(c) = bus.step_clock(m, d) {
+                if let Some(module) = bus.module_mut(m) {
+                    module.set_clock(c);
+                }
+            }
+        }
+        FaultKind::Dies
+        | FaultKind::Returns
+        | FaultKind::Reset
+        | FaultKind::Babble => {}
+    }
 }
 
 /// Time from a slot boundary of the master's clock to its sync's start of frame: the
@@ -389,7 +441,19 @@ pub(crate) fn build_bus(
 fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
     let shared = new_shared(cfg);
     let mut bus = build_bus(cfg, &shared)?;
+    bus.set_eof_error_rate(cfg.sim.eof_error_rate);
     let faults = fault_script(cfg)?;
+    let actions = crate::fault::bus_actions(&faults)?;
+    let mut next_action = 0;
+    if cfg.guardian {
+        let capable = master_capable();
+        for (n, g) in crate::guardian::for_scenario(sc, |n| capable.get(n).copied().unwrap_or(false))
+            .into_iter()
+            .enumerate()
+        {
+            bus.set_guardian(n, g);
+        }
+    }
     let end = cfg.sim.end_ns();
     let win = window(&cfg.sim);
     let mut meter = Meter::new(&sc.topics, win, bus.bit_ns());
@@ -428,6 +492,12 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
     // memory does not grow with the run (docs/SIM.md, Memory).
     while t < end {
         t = (t + step).min(end);
+        // The bus-level faults at their times within this chunk.
+        while let Some(&f) = actions.get(next_action).filter(|f| f.at <= t) {
+            bus.run_until(f.at);
+            apply_bus_fault(&mut bus, &f);
+            next_action += 1;
+        }
         bus.run_until(t);
         if cfg.module_dies_at.is_some() {
             supervision.extend(supervise(&bus, t));
@@ -494,6 +564,15 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             master: m.is_master(),
             reboots: m.reboots(),
             safe_exits: m.safe_exits(),
+            safe_times: m.safe_times(),
+            error_state: bus
+                .controller(n)
+                .map(|c| c.conf.state())
+                .unwrap_or_default(),
+            fifo_overruns: bus
+                .controller(n)
+                .map_or(0, |c| c.stats.rx_overrun.iter().sum()),
+            guardian_cut_at: bus.guardian(n).and_then(|g| g.tripped.map(|t| t.0)),
         });
     }
     syncs.finish(end);

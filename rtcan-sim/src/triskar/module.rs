@@ -186,6 +186,10 @@ pub trait Inspect {
     fn reboots(&self) -> u32;
     /// Times the safe state was left (required, then no longer required).
     fn safe_exits(&self) -> u32;
+    /// Global times of the first safe-state entry and of the last exit, if any.
+    fn safe_times(&self) -> (Option<Nanos>, Option<Nanos>);
+    /// Its local clock changed (a clock step, `Bus::step_clock`).
+    fn set_clock(&mut self, clock: NodeClock);
     fn safe_now(&self) -> bool;
     fn app(&self) -> &App;
     /// SRT publications so far, per transmit index (drained by the measurement).
@@ -299,6 +303,8 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     was_ok: bool,
     trips: u32,
     exits: u32,
+    first_trip_at: Option<Nanos>,
+    last_exit_at: Option<Nanos>,
 }
 
 impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
@@ -336,6 +342,8 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             was_ok: false,
             trips: 0,
             exits: 0,
+            first_trip_at: None,
+            last_exit_at: None,
         }
     }
 
@@ -435,11 +443,13 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         if !safe {
             if self.trips > self.exits {
                 self.exits += 1;
+                self.last_exit_at = Some(global);
             }
             self.was_ok = true;
         } else if self.was_ok {
             self.was_ok = false;
             self.trips += 1;
+            self.first_trip_at.get_or_insert(global);
         }
         self.host.pump(&mut self.engine, now, can);
         let e = self.engine.poll(now, can, &mut self.host);
@@ -535,6 +545,12 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     }
     fn safe_exits(&self) -> u32 {
         self.exits
+    }
+    fn safe_times(&self) -> (Option<Nanos>, Option<Nanos>) {
+        (self.first_trip_at, self.last_exit_at)
+    }
+    fn set_clock(&mut self, clock: NodeClock) {
+        self.clock = clock;
     }
     fn safe_now(&self) -> bool {
         self.status.safe_state_required()
