@@ -291,7 +291,9 @@ pub struct Bus<M: Module> {
 
 /// The node may start a frame: not bus-off, not cut off, not stopped by its guardian.
 fn transmits<M>(n: &Node<M>) -> bool {
-    !n.can.conf.is_bus_off() && !n.partitioned && n.guardian.as_ref().is_none_or(|g| !g.is_tripped())
+    !n.can.conf.is_bus_off()
+        && !n.partitioned
+        && n.guardian.as_ref().is_none_or(|g| !g.is_tripped())
 }
 
 fn result_code(r: TxResult) -> u8 {

@@ -150,7 +150,10 @@ mod tests {
         let mut h = Guardian::new(vec![0x150], true, 10, 10_000_000);
         assert!(h.admit(0, CanId::from_raw(0).unwrap()));
         assert!(!h.admit(1, id(0, 0x151)));
-        assert_eq!(h.tripped.map(|t| t.1), Some(Trip::ForeignId(id(0, 0x151).raw())));
+        assert_eq!(
+            h.tripped.map(|t| t.1),
+            Some(Trip::ForeignId(id(0, 0x151).raw()))
+        );
     }
 
     #[test]

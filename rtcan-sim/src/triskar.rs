@@ -277,10 +277,7 @@ fn apply_bus_fault(bus: &mut Bus<Box<dyn TriskarModule>>, f: &crate::fault::Faul
                 }
             }
         }
-        FaultKind::Dies
-        | FaultKind::Returns
-        | FaultKind::Reset
-        | FaultKind::Babble => {}
+        FaultKind::Dies | FaultKind::Returns | FaultKind::Reset | FaultKind::Babble => {}
     }
 }
 
@@ -447,9 +444,10 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
     let mut next_action = 0;
     if cfg.guardian {
         let capable = master_capable();
-        for (n, g) in crate::guardian::for_scenario(sc, |n| capable.get(n).copied().unwrap_or(false))
-            .into_iter()
-            .enumerate()
+        for (n, g) in
+            crate::guardian::for_scenario(sc, |n| capable.get(n).copied().unwrap_or(false))
+                .into_iter()
+                .enumerate()
         {
             bus.set_guardian(n, g);
         }

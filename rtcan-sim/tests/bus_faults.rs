@@ -34,7 +34,8 @@ impl Probe {
     }
     fn send_next(&mut self, can: &mut SimController) {
         if self.next < self.count {
-            let f = Frame::new(CanId::from_raw(self.id).unwrap(), &self.next.to_le_bytes()).unwrap();
+            let f =
+                Frame::new(CanId::from_raw(self.id).unwrap(), &self.next.to_le_bytes()).unwrap();
             can.load(Mailbox(0), &f);
             self.next += 1;
         }
@@ -56,7 +57,13 @@ impl Module for Probe {
         self.rx.push(u32::from_le_bytes(b));
         None
     }
-    fn tx_done(&mut self, _: Mailbox, r: TxResult, _: Nanos, can: &mut SimController) -> Option<Nanos> {
+    fn tx_done(
+        &mut self,
+        _: Mailbox,
+        r: TxResult,
+        _: Nanos,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
         self.done.push(r);
         // NART: a failed frame is not sent again; the next one goes.
         self.send_next(can);
@@ -142,7 +149,10 @@ fn with_nart_the_rejecting_receivers_lose_the_frame_for_good() {
     let got: Vec<usize> = (1..4).map(|n| b.module(n).unwrap().rx.len()).collect();
     for n in 1..4 {
         let rx = &b.module(n).unwrap().rx;
-        assert!(rx.windows(2).all(|w| w[0] < w[1]), "no duplicate at node {n}");
+        assert!(
+            rx.windows(2).all(|w| w[0] < w[1]),
+            "no duplicate at node {n}"
+        );
     }
     assert!(got.iter().any(|&g| g < 400), "{got:?}");
     // Some frame was received by one receiver and not by another; each receiver lost
@@ -273,13 +283,19 @@ fn a_guardian_cuts_a_babbler_and_lets_a_well_behaved_node_through() {
         None
     });
     b.run_until(50_000_000);
-    assert_eq!(b.wire.len(), 20, "the budget of the first cycle, then silence");
+    assert_eq!(
+        b.wire.len(),
+        20,
+        "the budget of the first cycle, then silence"
+    );
     assert!(b.wire.iter().all(|w| w.node == 0 && w.ok));
     let g0 = b.guardian(0).unwrap().tripped.unwrap();
     assert_eq!(g0.1, Trip::OverBudget);
     assert_eq!(
         b.guardian(1).unwrap().tripped.map(|t| t.1),
-        Some(Trip::ForeignId(CanId::new(1, MsgId(0x152), 0).unwrap().raw()))
+        Some(Trip::ForeignId(
+            CanId::new(1, MsgId(0x152), 0).unwrap().raw()
+        ))
     );
     // A node within its budget is never cut.
     let mut ok = bus(2, false, Probe::sender(own.raw(), 1000));
