@@ -460,6 +460,19 @@ fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
                     speed_line(speed)
                 ));
             }
+            // A goal missed fails the command (CI runs it, scripts/test.sh).
+            let missed: Vec<String> = rows
+                .iter()
+                .filter(|r| !r.goals().is_empty())
+                .map(|r| format!("{}: {}", r.case.name, r.goals().join("; ")))
+                .collect();
+            if !missed.is_empty() {
+                return Err(format!(
+                    "fault campaign: goals missed in {} case(s):\n  {}",
+                    missed.len(),
+                    missed.join("\n  ")
+                ));
+            }
         }
     }
     if let (Some(dir), false) = (&a.out, a.json) {
@@ -526,6 +539,9 @@ mod tests {
         assert_eq!((c.req.cfg.seconds, c.json), (1000.0, true));
         let e = parse(&args("--campaign --out /tmp/x")).unwrap_err();
         assert!(e.contains("--out"), "{e}");
+        let short = parse(&args("--campaign --seconds 2")).unwrap().unwrap();
+        let e = session::run(&short.req, &mut |_, _| {}).unwrap_err();
+        assert!(e.contains("--seconds >= 7"), "{e}");
         // What the campaign cannot honour is refused by the session, not ignored.
         for extra in [
             "--ber 1e-4",

@@ -241,6 +241,26 @@ pub fn bus_actions(faults: &[Fault]) -> Result<Vec<Fault>, String> {
     Ok(out)
 }
 
+/// Applies a bus-level fault to `bus` now: `Stuck`, `Release`, `Partition`, `Rejoin`,
+/// `Stall`. Returns false for the others (module faults; `Step`, which also needs the
+/// module's own copy of its clock).
+pub fn apply_bus<M: crate::bus::Module>(bus: &mut crate::bus::Bus<M>, f: &Fault) -> bool {
+    let m = f.module;
+    match f.kind {
+        FaultKind::Stuck => bus.set_stuck(m, true),
+        FaultKind::Release => bus.set_stuck(m, false),
+        FaultKind::Partition => bus.set_partitioned(m, true),
+        FaultKind::Rejoin => bus.set_partitioned(m, false),
+        FaultKind::Stall(d) => bus.stall(m, f.at.saturating_add(d)),
+        FaultKind::Dies
+        | FaultKind::Returns
+        | FaultKind::Reset
+        | FaultKind::Babble
+        | FaultKind::Step(_) => return false,
+    }
+    true
+}
+
 /// When `module` starts babbling, if it does (the earliest such fault).
 pub fn babble_from(faults: &[Fault], module: usize) -> Option<Nanos> {
     faults

@@ -42,6 +42,9 @@ pub struct SimConfig {
     /// Per receiver and frame, probability of an error only it sees in the last-but-one
     /// bit of EOF (`Bus::set_eof_error_rate`; 0 = none).
     pub eof_error_rate: f64,
+    /// Bus-level faults (`fault::apply_bus`: stuck, partition, stall) at their times
+    /// (a scenario file's `faults`).
+    pub faults: Vec<crate::fault::Fault>,
 }
 
 impl Default for SimConfig {
@@ -57,6 +60,7 @@ impl Default for SimConfig {
             wire_log: None,
             cpu: None,
             eof_error_rate: 0.0,
+            faults: Vec::new(),
         }
     }
 }
@@ -291,8 +295,21 @@ fn run_bus<'t, M: Module>(
     let mut kept = Vec::new();
     let mut ov = 0;
     let mut t = 0;
+    let mut faults = cfg.faults.clone();
+    faults.sort_by_key(|f| f.at);
+    let mut next_fault = 0;
     while t < end {
         t = (t + CHUNK_NS).min(end);
+        while let Some(f) = faults.get(next_fault).filter(|f| f.at <= t) {
+            bus.run_until(f.at);
+            if !crate::fault::apply_bus(&mut bus, f) {
+                return Err(format!(
+                    "fault {:?}: not supported by this scenario's nodes",
+                    f.kind
+                ));
+            }
+            next_fault += 1;
+        }
         bus.run_until(t);
         // Events before the frames that carry them.
         for n in 0..bus.len() {

@@ -313,7 +313,27 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             let user = robot::parse_user(&text, file.parent().unwrap_or(Path::new(".")))?;
             let plan = load(&user.robot)?;
             let traffic = robot::expand(&user, &plan)?;
-            run_plan(&plan, &traffic, req, Vec::new())
+            let names: Vec<&str> = plan.modules.iter().map(|m| m.name.as_str()).collect();
+            let mut req = req.clone();
+            for spec in &user.faults {
+                let f = crate::fault::parse(spec, &names)?;
+                use crate::fault::FaultKind as K;
+                if !matches!(
+                    f.kind,
+                    K::Stuck | K::Release | K::Partition | K::Rejoin | K::Stall(_)
+                ) {
+                    return Err(format!(
+                        "{}: fault `{spec}`: a scenario file's nodes take the bus-level faults \
+                         stuck, release, partition, rejoin and stall=D (module faults run on \
+                         triskar2, `--fault`)",
+                        file.display()
+                    ));
+                }
+                req.cfg.faults.push(f);
+            }
+            crate::fault::bus_actions(&req.cfg.faults)
+                .map_err(|e| format!("{}: {e}", file.display()))?;
+            run_plan(&plan, &traffic, &req, Vec::new())
         }
         Which::Triskar {
             robot: path,
@@ -429,6 +449,60 @@ mod tests {
         r.master_dies_at = Some(1.0);
         let e = run(&r, &mut |_, _| {}).unwrap_err();
         assert!(e.contains("triskar2 scenario only"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod fault_file_tests {
+    use super::*;
+
+    fn scenario(dir: &Path, faults: &str) -> PathBuf {
+        let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/rtcan-paper.toml");
+        let p = dir.join(format!("s{}.toml", faults.len()));
+        std::fs::write(
+            &p,
+            format!("robot = \"{robot}\"\nfaults = [{faults}]\n[traffic]\n\"s_*\" = {{ period = \"20ms\" }}\n"),
+        )
+        .unwrap();
+        p
+    }
+
+    fn hrt_misses(faults: &str, dir: &Path) -> Result<u64, String> {
+        let r = Request {
+            which: Which::File(scenario(dir, faults)),
+            cfg: SimConfig {
+                seconds: 1.0,
+                record_wire: false,
+                ..SimConfig::default()
+            },
+            seconds_given: true,
+            sweep: false,
+            master_dies_at: None,
+            faults: Vec::new(),
+            campaign: false,
+        };
+        match run(&r, &mut |_, _| {})? {
+            Report::Robot { run, .. } => Ok(run.figures.hrt.iter().map(|h| h.misses).sum()),
+            _ => Err("not a robot report".into()),
+        }
+    }
+
+    /// A scenario file scripts the bus-level faults; module faults are refused there.
+    #[test]
+    fn a_scenario_file_scripts_bus_faults() {
+        let dir = std::env::temp_dir().join(format!("rtcan-fault-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        assert_eq!(hrt_misses("", &dir), Ok(0));
+        // The bus held dominant for 200 ms: every HRT occurrence in it is missed.
+        let stuck = hrt_misses("\"node3:stuck@300ms\", \"node3:release@500ms\"", &dir).unwrap();
+        assert!(stuck > 100, "{stuck}");
+        let e = hrt_misses("\"node3:dies@300ms\"", &dir).unwrap_err();
+        assert!(e.contains("bus-level faults"), "{e}");
+        let e = hrt_misses("\"node9:stuck@300ms\"", &dir).unwrap_err();
+        assert!(e.contains("no module `node9`"), "{e}");
+        let e = hrt_misses("\"node3:release@300ms\"", &dir).unwrap_err();
+        assert!(e.contains("not stuck"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
 

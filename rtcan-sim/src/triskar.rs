@@ -262,22 +262,15 @@ fn master_capable() -> [bool; MODULES.len()] {
 
 /// Applies one bus-level fault (`fault::bus_actions`) now.
 fn apply_bus_fault(bus: &mut Bus<Box<dyn TriskarModule>>, f: &crate::fault::Fault) {
-    use crate::fault::FaultKind;
-    let m = f.module;
-    match f.kind {
-        FaultKind::Stuck => bus.set_stuck(m, true),
-        FaultKind::Release => bus.set_stuck(m, false),
-        FaultKind::Partition => bus.set_partitioned(m, true),
-        FaultKind::Rejoin => bus.set_partitioned(m, false),
-        FaultKind::Stall(d) => bus.stall(m, f.at.saturating_add(d)),
-        FaultKind::Step(d) => {
-            if let Some(c) = bus.step_clock(m, d) {
-                if let Some(module) = bus.module_mut(m) {
-                    module.set_clock(c);
-                }
+    if crate::fault::apply_bus(bus, f) {
+        return;
+    }
+    if let crate::fault::FaultKind::Step(d) = f.kind {
+        if let Some(c) = bus.step_clock(f.module, d) {
+            if let Some(module) = bus.module_mut(f.module) {
+                module.set_clock(c);
             }
         }
-        FaultKind::Dies | FaultKind::Returns | FaultKind::Reset | FaultKind::Babble => {}
     }
 }
 
