@@ -170,7 +170,7 @@ mod tests {
             assert!(g.admit(t, id(0, 0x150)));
             g.sent();
         }
-        assert!(!g.tripped.is_some());
+        assert!(g.tripped.is_none());
         assert!(!g.admit(19_999_999, id(0, 0x150)));
         assert_eq!(g.tripped, Some((19_999_999, Trip::OverBudget)));
     }

@@ -200,7 +200,7 @@ impl SlotCheck {
             if k < slots {
                 k < 64 && mask & (1u64 << k) != 0
             } else {
-                k % slots == 0
+                k.is_multiple_of(slots)
             }
         };
         let (first, last) = (s / self.slot_ns, e / self.slot_ns);
