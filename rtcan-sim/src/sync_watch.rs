@@ -137,6 +137,14 @@ mod tests {
         assert_eq!((c.bad, c.checked), (4, 7));
         c.frame(&at(3_100_000, 1, hrt, true)); // more than a cycle later: unchecked
         assert_eq!((c.bad, c.checked), (4, 7));
+        // With a tolerance of 1 us, an HRT frame 500 ns early into slot 3 passes, 2 us
+        // early does not.
+        let mut t = SlotCheck::new(100_000, 10, 2_000).with_tolerance(1_000);
+        t.frame(&at(2_002_000, 50_000, 0, true));
+        t.frame(&at(2_299_500, 90_000, hrt, true));
+        assert_eq!((t.bad, t.checked), (0, 2));
+        t.frame(&at(2_298_000, 90_000, hrt, true));
+        assert_eq!((t.bad, t.checked), (1, 3));
     }
 }
 
@@ -151,6 +159,9 @@ pub struct SlotCheck {
     slot_ns: Nanos,
     slots: u64,
     lead: Nanos,
+    /// A frame may reach this far into a neighbouring slot (the sync sender's own grid
+    /// drifts from the one its sync's start of frame gives the wire: its clock rate).
+    tol: Nanos,
     anchor: Option<(Nanos, u64)>,
     /// Frames outside their slots or windows.
     pub bad: u64,
@@ -168,6 +179,14 @@ impl SlotCheck {
             lead,
             ..SlotCheck::default()
         }
+    }
+
+    /// Accepts frames that reach up to `tol` ns into a neighbouring slot: one bit time
+    /// plus what the sync sender's clock drifts over a cycle (its frames follow its own
+    /// grid, which runs at its rate; the wire only shows where its sync started).
+    pub fn with_tolerance(mut self, tol: Nanos) -> Self {
+        self.tol = tol;
+        self
     }
 
     /// Feeds one frame of the wire log.
@@ -203,6 +222,7 @@ impl SlotCheck {
                 k.is_multiple_of(slots)
             }
         };
+        let (s, e) = (s + self.tol, e.saturating_sub(self.tol).max(s + self.tol));
         let (first, last) = (s / self.slot_ns, e / self.slot_ns);
         let ok = if id.laxity() == 0 {
             first == last && reserved(first)

@@ -458,9 +458,12 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         .unwrap_or(Nanos::MAX);
     let mut syncs = crate::sync_watch::SyncWatch::new(sc.bus().map_or(0, |b| b.cycle_ns()));
     // The same check anchored on the wire, whoever the master: the sync leaves one timer
-    // interrupt latency into slot 0.
+    // interrupt latency into slot 0; the sender's own frames follow its clock, which may
+    // drift from the wire's grid by up to drift_ppm over a cycle (plus one bit).
     let mut live = sc.bus().map(|b| {
+        let drift = (b.cycle_ns() as f64 * cfg.sim.drift_ppm.abs() / 1e6) as Nanos;
         crate::sync_watch::SlotCheck::new(b.slot_ns, b.slots_per_cycle, sync_lead_ns(&cfg.sim))
+            .with_tolerance(b.bit_ns() + drift)
     });
     let mut log = match &cfg.sim.wire_log {
         Some(p) => Some((
