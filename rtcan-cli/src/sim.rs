@@ -539,7 +539,10 @@ mod tests {
         assert_eq!((c.req.cfg.seconds, c.json), (1000.0, true));
         let e = parse(&args("--campaign --out /tmp/x")).unwrap_err();
         assert!(e.contains("--out"), "{e}");
-        let short = parse(&args("--campaign --seconds 2")).unwrap().unwrap();
+        let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml");
+        let short = parse(&args(&format!("{robot} --campaign --seconds 2")))
+            .unwrap()
+            .unwrap();
         let e = session::run(&short.req, &mut |_, _| {}).unwrap_err();
         assert!(e.contains("--seconds >= 7"), "{e}");
         // What the campaign cannot honour is refused by the session, not ignored.
