@@ -57,6 +57,30 @@ pub struct Fault {
     pub at: Nanos,
 }
 
+impl Fault {
+    /// The fault in `parse` syntax (times in µs, so it parses back to itself).
+    pub fn spec(&self, modules: &[&str]) -> String {
+        let m = modules.get(self.module).copied().unwrap_or("?");
+        let kind = match self.kind {
+            FaultKind::Dies => "dies".to_string(),
+            FaultKind::Returns => "returns".into(),
+            FaultKind::Reset => "reset".into(),
+            FaultKind::Babble => "babble".into(),
+            FaultKind::Stuck => "stuck".into(),
+            FaultKind::Release => "release".into(),
+            FaultKind::Partition => "partition".into(),
+            FaultKind::Rejoin => "rejoin".into(),
+            FaultKind::Stall(d) => format!("stall={}us", d as f64 / 1e3),
+            FaultKind::Step(d) => format!(
+                "step={}{}us",
+                if d < 0 { '-' } else { '+' },
+                d.unsigned_abs() as f64 / 1e3
+            ),
+        };
+        format!("{m}:{kind}@{}us", self.at as f64 / 1e3)
+    }
+}
+
 /// The accepted forms, for error messages and `--help`.
 pub const FORMS: &str =
     "MODULE:dies@T, MODULE:returns@T, MODULE:reset@T, MODULE:babble@T, MODULE:stuck@T, MODULE:release@T, MODULE:partition@T, MODULE:rejoin@T, MODULE:stall=D@T, MODULE:step=+D@T or step=-D@T (T, D: a number with unit s, ms or us, e.g. 3.2s)";
@@ -319,6 +343,21 @@ mod tests {
         ] {
             let e = parse(bad, &M).unwrap_err();
             assert!(e.contains(bad) && e.contains("accepted"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn spec_parses_back() {
+        for s in [
+            "motor2:reset@3.2s",
+            "gateway:returns@5000ms",
+            "motor2:stall=5ms@3s",
+            "motor2:step=-1ms@2s",
+            "motor1:step=+250us@1.5s",
+            "motor1:partition@1s",
+        ] {
+            let f = parse(s, &M).unwrap();
+            assert_eq!(parse(&f.spec(&M), &M), Ok(f), "{s} -> {}", f.spec(&M));
         }
     }
 

@@ -106,6 +106,18 @@ fn stuck_dominant_stops_the_robot_and_it_recovers_when_released() {
     let at = r.syncs.last_doubled_at.unwrap();
     assert!((2 * S..2 * S + CYCLE).contains(&at), "{at}");
     assert_eq!(r.slots_live.0, 0, "{:?}", r.slots_live);
+    // `rtcan sim --fault ...` shows the script and the sync figures (text and JSON).
+    let text = triskar::report::triskar_text(&r);
+    assert!(
+        text.contains("faults: motor3:stuck@1000000us motor3:release@2000000us"),
+        "{text}"
+    );
+    assert!(text.contains(", 1 cycles with two syncs,"), "{text}");
+    let json = triskar::report::triskar_json(&r, 1.0);
+    assert!(
+        json.contains("\"doubled_syncs\":1,") && json.contains("\"masters_at_end\":[\"gateway\"]"),
+        "{json}"
+    );
 }
 
 #[test]
