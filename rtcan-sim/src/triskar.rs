@@ -458,12 +458,13 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         .unwrap_or(Nanos::MAX);
     let mut syncs = crate::sync_watch::SyncWatch::new(sc.bus().map_or(0, |b| b.cycle_ns()));
     // The same check anchored on the wire, whoever the master: the sync leaves one timer
-    // interrupt latency into slot 0; the sender's own frames follow its clock, which may
-    // drift from the wire's grid by up to drift_ppm over a cycle (plus one bit).
+    // interrupt latency into slot 0. The sender's own frames follow its own grid: its
+    // latency to the sync's start of frame varies (the guard covers it, PROTOCOL §5.3)
+    // and its clock drifts from the wire's grid by up to drift_ppm over a cycle.
     let mut live = sc.bus().map(|b| {
         let drift = (b.cycle_ns() as f64 * cfg.sim.drift_ppm.abs() / 1e6) as Nanos;
         crate::sync_watch::SlotCheck::new(b.slot_ns, b.slots_per_cycle, sync_lead_ns(&cfg.sim))
-            .with_tolerance(b.bit_ns() + drift)
+            .with_tolerance(b.guard_ns + b.bit_ns() + drift)
     });
     let mut log = match &cfg.sim.wire_log {
         Some(p) => Some((
