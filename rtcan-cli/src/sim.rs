@@ -12,7 +12,7 @@ use rtcan_sim::{candump, report, svg};
 const SYNOPSIS: &str =
     "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N]
                  [--seed S] [--load X] [--ber P] [--json] [--out DIR] [--sweep]
-                 [--master-dies-at S] [--fault MODULE:KIND@T]...
+                 [--master-dies-at S] [--fault MODULE:KIND[=D]@T]...
                  [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]
                  [--cpu-cost max|mean]
        rtcan sim [robot.toml] --emulate [--seconds N] [--json] [--images DIR]
@@ -32,7 +32,8 @@ const OPTIONS: &str =
   --sweep             rtcan-paper: add the load sweep 0.5..1.2
   --master-dies-at S  triskar2: the bus master stops at S seconds (S >= 0)
   --fault F           triskar2, repeatable: MODULE:KIND@T, KIND one of dies, returns,
-                      reset, babble (T with unit s, ms or us), e.g. --fault gateway:dies@2s
+                      reset, babble, stuck, release, partition, rejoin, stall=D, step=+D
+                      or step=-D (T, D with unit s, ms or us), e.g. --fault gateway:dies@2s
                       --fault gateway:returns@5s (docs/SIM.md, Faults)
   --campaign          the fault campaign on triskar2 and rtcan-paper, N s per case
                       (default 10): one table, or JSON with --json
