@@ -836,7 +836,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             // dominant) is stale: sent now it would place this cycle's slots at the wrong
             // time, next to this cycle's own sync (docs/PROTOCOL.md §5.6).
             for (i, mb) in self.mailboxes.iter().enumerate() {
-                if *mb == Loaded::Sync {
+                if matches!(mb, Loaded::Sync) {
                     can.abort(Mailbox(i as u8));
                 }
             }
