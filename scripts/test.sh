@@ -11,6 +11,12 @@ cargo test --workspace --exclude rtcan-emu
 echo "== simulator on the modelled CPU: issue 10's before/after table (docs/SIM.md)"
 cargo run --release -q -p rtcan-sim --example cpu_before_after
 
+echo "== shortened fault campaign (issue 11; README's table: --seconds 1000)"
+# 30 cases x 7 s on the modelled CPU (~5 s release): exits 1 if any case has a bad
+# delivery, more cycles with two syncs than it allows, a wrong safe state or master, or
+# frames out of their slots (rtcan_sim::campaign::Row::goals).
+cargo run --release -q -p rtcan-cli -- sim robot.toml --campaign --seconds 7 > /dev/null
+
 host=$(rustc -vV | sed -n 's/^host: //p')
 echo "== host tests of the firmware workspaces' portable crates"
 (cd boards && cargo test -p rtcan-board-common --target "$host")

@@ -12,10 +12,11 @@ use rtcan_sim::{candump, report, svg};
 const SYNOPSIS: &str =
     "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N]
                  [--seed S] [--load X] [--ber P] [--json] [--out DIR] [--sweep]
-                 [--master-dies-at S]
+                 [--master-dies-at S] [--fault MODULE:KIND[=D]@T]...
                  [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]
                  [--cpu-cost max|mean]
        rtcan sim [robot.toml] --emulate [--seconds N] [--json] [--images DIR]
+       rtcan sim [robot.toml] --campaign [--seconds N] [--seed S] [--json]
        rtcan sim --help";
 
 const OPTIONS: &str =
@@ -30,6 +31,12 @@ const OPTIONS: &str =
   --out DIR           write candump log, SVG plots and report.json to DIR
   --sweep             rtcan-paper: add the load sweep 0.5..1.2
   --master-dies-at S  triskar2: the bus master stops at S seconds (S >= 0)
+  --fault F           triskar2, repeatable: MODULE:KIND@T, KIND one of dies, returns,
+                      reset, babble, stuck, release, partition, rejoin, stall=D, step=+D
+                      or step=-D (T, D with unit s, ms or us), e.g. --fault gateway:dies@2s
+                      --fault gateway:returns@5s (docs/SIM.md, Faults)
+  --campaign          the fault campaign on triskar2 and rtcan-paper, N s per case
+                      (default 10): one table, or JSON with --json
   --cpu on|off        run every module's handlers on the modelled CPU (default on)
   --cpu-design D      prioritised (new, default) or single-priority (old) interrupt design
   --cpi X             cycles per instruction of the CPU model at 72 MHz (default 1.25)
@@ -51,6 +58,8 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     let (mut json, mut sweep, mut seconds_given) = (false, false, false);
     let mut out = None;
     let mut master_dies_at = None;
+    let mut faults = Vec::new();
+    let mut campaign = false;
     // The CPU model (rtcan_sim::cpu): on by default, prioritised design, CPI 1.25.
     let (mut cpu_on, mut design, mut cpi) = (true, rtcan_model::costs::Design::Prioritised, 1.25);
     let mut cost = rtcan_sim::cpu::Cost::Max;
@@ -75,6 +84,8 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
                 }
                 master_dies_at = Some(v);
             }
+            "--fault" => faults.push(value("--fault")?),
+            "--campaign" => campaign = true,
             "--seed" => cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
             "--load" => cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
             "--ber" => cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
@@ -132,6 +143,20 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     if sweep && which != Which::Paper {
         return Err("--sweep is supported by the rtcan-paper scenario only".into());
     }
+    if !faults.is_empty() && !matches!(which, Which::Triskar { .. }) {
+        return Err("--fault is supported by the triskar2 scenario only".into());
+    }
+    for f in &faults {
+        rtcan_sim::fault::parse(f, &rtcan_sim::triskar::MODULES)?;
+    }
+    if campaign {
+        if out.is_some() {
+            return Err("--campaign writes no files: drop --out".into());
+        }
+        if !seconds_given {
+            cfg.seconds = 10.0;
+        }
+    }
     cfg.cpu = if cpu_on {
         Some(rtcan_sim::cpu::CpuModel::new(design, cpi)?.with_cost(cost))
     } else {
@@ -144,6 +169,8 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
             seconds_given,
             sweep,
             master_dies_at,
+            faults,
+            campaign,
         },
         json,
         out,
@@ -422,6 +449,32 @@ fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
                 write(dir, "report.json", &triskar_report::triskar_json(result, x))?;
             }
         }
+        Report::Campaign { rows, speed } => {
+            if a.json {
+                emit(&rtcan_sim::campaign::json(rows));
+            } else {
+                emit(&format!(
+                    "fault campaign: {} s simulated per case, seed {}\n\n{}\n{}\n",
+                    cfg.seconds,
+                    cfg.seed,
+                    rtcan_sim::campaign::table(rows),
+                    speed_line(speed)
+                ));
+            }
+            // A goal missed fails the command (CI runs it, scripts/test.sh).
+            let missed: Vec<String> = rows
+                .iter()
+                .filter(|r| !r.goals().is_empty())
+                .map(|r| format!("{}: {}", r.case.name, r.goals().join("; ")))
+                .collect();
+            if !missed.is_empty() {
+                return Err(format!(
+                    "fault campaign: goals missed in {} case(s):\n  {}",
+                    missed.len(),
+                    missed.join("\n  ")
+                ));
+            }
+        }
     }
     if let (Some(dir), false) = (&a.out, a.json) {
         emit(&format!("wrote {}\n", dir.display()));
@@ -462,5 +515,49 @@ mod tests {
             .unwrap();
         assert_eq!(ok.req.which, Which::Paper);
         assert!(ok.req.seconds_given);
+    }
+
+    #[test]
+    fn fault_and_campaign_flags() {
+        let ok = parse(&args(
+            "robot.toml --fault gateway:dies@2s --fault gateway:returns@5000ms",
+        ))
+        .unwrap()
+        .unwrap();
+        assert_eq!(ok.req.faults, ["gateway:dies@2s", "gateway:returns@5000ms"]);
+        for bad in ["motor9:dies@1s", "gateway:explodes@1s", "gateway:dies@1"] {
+            let e = parse(&args(&format!("--fault {bad}"))).unwrap_err();
+            assert!(e.contains(bad) && e.contains("accepted"), "{bad}: {e}");
+        }
+        let e = parse(&args("--scenario rtcan-paper --fault gateway:dies@1s")).unwrap_err();
+        assert!(e.contains("triskar2 scenario only"), "{e}");
+        let c = parse(&args("--campaign")).unwrap().unwrap();
+        assert!(c.req.campaign);
+        assert_eq!(c.req.cfg.seconds, 10.0);
+        let c = parse(&args("--campaign --seconds 1000 --json"))
+            .unwrap()
+            .unwrap();
+        assert_eq!((c.req.cfg.seconds, c.json), (1000.0, true));
+        let e = parse(&args("--campaign --out /tmp/x")).unwrap_err();
+        assert!(e.contains("--out"), "{e}");
+        let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml");
+        let short = parse(&args(&format!("{robot} --campaign --seconds 2")))
+            .unwrap()
+            .unwrap();
+        let e = session::run(&short.req, &mut |_, _| {}).unwrap_err();
+        assert!(e.contains("--seconds >= 7"), "{e}");
+        // What the campaign cannot honour is refused by the session, not ignored.
+        for extra in [
+            "--ber 1e-4",
+            "--load 0.5",
+            "--master-dies-at 1",
+            "--fault motor1:dies@1s",
+        ] {
+            let a = parse(&args(&format!("--campaign {extra}")))
+                .unwrap()
+                .unwrap();
+            let e = session::run(&a.req, &mut |_, _| {}).unwrap_err();
+            assert!(e.contains("--campaign"), "{extra}: {e}");
+        }
     }
 }

@@ -843,6 +843,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 | 1;
             self.mask_cycle = self.pos.abs_cycle;
             let cycle = self.pos.counter as u16;
+            // A sync still waiting from an earlier cycle (the bus was held, e.g. stuck
+            // dominant) is stale: sent now it would place this cycle's slots at the wrong
+            // time, next to this cycle's own sync (docs/PROTOCOL.md §5.6).
+            for (i, mb) in self.mailboxes.iter().enumerate() {
+                if matches!(mb, Loaded::Sync) {
+                    can.abort(Mailbox(i as u8));
+                }
+            }
             if !late {
                 let frame = sync_frame(
                     Sync {

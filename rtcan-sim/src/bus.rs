@@ -18,8 +18,23 @@
 //! - Bit errors (optional, `bit_error_rate` per bit): the frame is hit at a uniformly
 //!   drawn bit after the SOF; an error flag (6 bits) and delimiter (8 bits) follow, then
 //!   the intermission. Receivers drop the frame, the transmitter retransmits (or fails
-//!   with NART; or ends aborted if an abort was requested meanwhile). Error counters
-//!   and bus-off are not modelled.
+//!   with NART; or ends aborted if an abort was requested meanwhile). Every controller
+//!   keeps ISO 11898-1 error counters (`confinement.rs`): error-passive, bus-off (no
+//!   transmission, no reception) and recovery after 128 runs of 11 recessive bits,
+//!   counted at each start of frame; level changes reach the module as
+//!   `Module::error_state`; on an idle bus the recovery completes after exactly
+//!   1408 recessive bit times (an `IdleRecover` bus event).
+//! - Errors seen by some receivers only (optional, `set_eof_error_rate`): a receiver
+//!   that alone sees an error in the last-but-one bit of EOF rejects the frame and sends
+//!   an error flag in the last bit, which the other receivers ignore (they already
+//!   accepted it) and the transmitter takes as an error: it retransmits, and those
+//!   receivers get the frame twice (inconsistent duplication; omission if the
+//!   transmitter fails before the retransmission). `WireFrame::partial`.
+//! - Faults on the bus (`fault.rs`, applied by the scenario at their times): a node
+//!   holding the bus dominant (`set_stuck`), a node cut off on its stub
+//!   (`set_partitioned`), a node whose interrupts are masked (`stall`: its FIFOs
+//!   overrun), a node whose clock jumps (`step_clock`), and per node a bus guardian
+//!   (`set_guardian`, `guardian.rs`).
 //! - Receive and transmit interrupts, and timer wake-ups, run `irq_latency_ns` after the
 //!   hardware event. Start-of-frame timestamps are taken by hardware, without latency,
 //!   in the receiver's local clock.
@@ -64,6 +79,17 @@ pub trait Module {
     ) -> Option<Nanos>;
     /// A receive FIFO overran.
     fn rx_overrun(&mut self, now: Nanos);
+    /// The controller's fault-confinement level changed (error-active, error-passive,
+    /// bus-off, recovered: bxCAN's status-change interrupt); `state` has the counters.
+    /// `None` keeps the armed timer (modules without fault handling need do nothing).
+    fn error_state(
+        &mut self,
+        _now: Nanos,
+        _state: rtcan_core::confinement::ErrorState,
+        _can: &mut SimController,
+    ) -> Option<Nanos> {
+        None
+    }
 }
 
 /// Physical parameters of one node.
@@ -106,8 +132,12 @@ pub struct WireFrame {
     pub node: usize,
     /// The frame.
     pub frame: Frame,
-    /// False when destroyed by an error frame.
+    /// False when destroyed by an error frame (or retransmitted after a per-receiver
+    /// error in the last bit of EOF, see `partial`).
     pub ok: bool,
+    /// Accepted by some receivers but rejected by others after an error in the
+    /// last-but-one bit of EOF; the transmitter retransmits it (`ok` is false).
+    pub partial: bool,
 }
 
 /// Bus-wide counters.
@@ -123,6 +153,9 @@ pub struct BusStats {
     pub id_collisions: u64,
     /// Time the bus was not idle (frames, error frames, intermissions), ns.
     pub busy_ns: Nanos,
+    /// Frames some receivers accepted and others rejected (error in the last-but-one
+    /// bit of EOF), then retransmitted.
+    pub eof_errors: u64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -145,6 +178,12 @@ enum Ev {
     Cpu {
         node: usize,
     },
+    /// A fault-confinement level change of the node's controller (`confinement.rs`).
+    ErrIrq {
+        node: usize,
+    },
+    /// On an idle bus a bus-off controller may have completed its recovery.
+    IdleRecover,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -162,6 +201,8 @@ enum State {
         sof: Nanos,
         frame: Frame,
         ok: bool,
+        /// Receivers (bit per node) that saw an error in the last-but-one bit of EOF.
+        rejects: u64,
     },
 }
 
@@ -204,6 +245,12 @@ struct Node<M> {
     last_req: Option<(Nanos, Nanos)>,
     /// The modelled CPU and the key of its next event.
     cpu: Option<(Cpu, Key)>,
+    /// Interrupts are masked until this global time (`stall`).
+    stalled_until: Nanos,
+    /// Cut off from the bus (`set_partitioned`).
+    partitioned: bool,
+    /// Its bus guardian, if it has one.
+    guardian: Option<crate::guardian::Guardian>,
 }
 
 /// The simulated bus with its nodes.
@@ -232,6 +279,21 @@ pub struct Bus<M: Module> {
     pub stats: BusStats,
     offers: Vec<(u32, usize, usize)>,
     irqs: Vec<(Nanos, Ev)>,
+    /// Recessive bits before the start of frame being arbitrated (trailing bits of the
+    /// last frame and idle time): what bus-off controllers count towards recovery.
+    recessive_run: u64,
+    /// The node whose transceiver holds the bus dominant (`set_stuck`).
+    stuck: Option<usize>,
+    /// Per receiver and frame, probability of an error it alone sees in the last-but-one
+    /// bit of EOF.
+    eof_error_rate: f64,
+}
+
+/// The node may start a frame: not bus-off, not cut off, not stopped by its guardian.
+fn transmits<M>(n: &Node<M>) -> bool {
+    !n.can.conf.is_bus_off()
+        && !n.partitioned
+        && n.guardian.as_ref().is_none_or(|g| !g.is_tripped())
 }
 
 fn result_code(r: TxResult) -> u8 {
@@ -270,7 +332,136 @@ impl<M: Module> Bus<M> {
             stats: BusStats::default(),
             offers: Vec::new(),
             irqs: Vec::new(),
+            recessive_run: 0,
+            stuck: None,
+            eof_error_rate: 0.0,
         }
+    }
+
+    /// Per receiver and frame, the probability that this receiver alone sees an error in
+    /// the last-but-one bit of EOF (0 = never; the bit error rate is a good value).
+    pub fn set_eof_error_rate(&mut self, p: f64) {
+        self.eof_error_rate = p;
+    }
+
+    /// Gives node `i` a bus guardian (`guardian.rs`).
+    pub fn set_guardian(&mut self, i: usize, g: crate::guardian::Guardian) {
+        if let Some(node) = self.nodes.get_mut(i) {
+            node.guardian = Some(g);
+        }
+    }
+
+    /// Node `i`'s bus guardian.
+    pub fn guardian(&self, i: usize) -> Option<&crate::guardian::Guardian> {
+        self.nodes.get(i).and_then(|n| n.guardian.as_ref())
+    }
+
+    /// Node `i`'s transceiver holds the bus dominant from now (`on`), or lets it go. While
+    /// it does, no frame starts and the frame on the wire is destroyed; every controller
+    /// sees dominant bits after its error flag: REC +8 per 8 bits (error-passive at
+    /// once on the scale of a cycle), the transmitter of that frame TEC +8 per 8 bits
+    /// (bus-off). Released, the bus is idle (recessive) from now.
+    pub fn set_stuck(&mut self, i: usize, on: bool) {
+        if !on {
+            if self.stuck == Some(i) {
+                self.stuck = None;
+                if let State::Idle { from } = self.state {
+                    self.state = State::Idle {
+                        from: from.max(self.now),
+                    };
+                }
+                self.maybe_start_arbitration();
+            }
+            return;
+        }
+        self.stuck = Some(i);
+        let tx = match &mut self.state {
+            State::Busy { node, ok, .. } => {
+                *ok = false;
+                Some(*node)
+            }
+            _ => None,
+        };
+        let now = self.now;
+        for n in 0..self.nodes.len() {
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
+            let level = node.can.conf.level();
+            node.can.conf.stuck_dominant(tx == Some(n));
+            if node.can.conf.level() != level {
+                let t = now + node.setup.irq_latency_ns;
+                self.push_irq(n, t, Ev::ErrIrq { node: n });
+            }
+        }
+    }
+
+    /// Node `i` is cut off from the bus (`on`) or joins it again. Cut off, it neither
+    /// receives nor takes part in arbitration; alone on its stub its frames would get
+    /// no acknowledgement: TEC rises to error-passive and stays there (ISO 11898-1: an
+    /// error-passive transmitter does not count acknowledgement errors).
+    pub fn set_partitioned(&mut self, i: usize, on: bool) {
+        let now = self.now;
+        let Some(node) = self.nodes.get_mut(i) else {
+            return;
+        };
+        node.partitioned = on;
+        if on {
+            let level = node.can.conf.level();
+            node.can.conf.unacknowledged();
+            if node.can.conf.level() != level {
+                let t = now + node.setup.irq_latency_ns;
+                self.push_irq(i, t, Ev::ErrIrq { node: i });
+            }
+        } else {
+            self.maybe_start_arbitration();
+        }
+    }
+
+    /// Node `i`'s interrupts (timer, receive, transmit, status) are masked until global
+    /// time `until`: they run then. Frames keep arriving in its FIFOs, which overrun.
+    pub fn stall(&mut self, i: usize, until: Nanos) {
+        if let Some(node) = self.nodes.get_mut(i) {
+            node.stalled_until = node.stalled_until.max(until);
+        }
+    }
+
+    /// Node `i`'s local clock jumps by `delta_ns` now (its offset changes; an offset
+    /// cannot go below zero, so a backward step larger than the offset is cut short).
+    /// Its armed timer fires at the same local time, now at another global time.
+    /// Returns the new clock.
+    pub fn step_clock(&mut self, i: usize, delta_ns: i64) -> Option<NodeClock> {
+        let now = self.now;
+        let node = self.nodes.get_mut(i)?;
+        let c = &mut node.setup.clock;
+        c.offset_ns = if delta_ns >= 0 {
+            c.offset_ns.saturating_add(delta_ns.unsigned_abs())
+        } else {
+            c.offset_ns.saturating_sub(delta_ns.unsigned_abs())
+        };
+        let clock = node.setup.clock;
+        let lat = node.setup.irq_latency_ns;
+        let rearm = match (node.wake, node.last_req) {
+            (Some(_), Some((l, _))) => {
+                let g = clock.global_at(l);
+                node.last_req = Some((l, g));
+                Some(g.saturating_add(lat).max(now))
+            }
+            _ => {
+                node.last_req = None;
+                None
+            }
+        };
+        if let Some(t) = rearm {
+            let k = key(t, self.next_seq());
+            self.set_wake(i, Some(k));
+        }
+        Some(clock)
+    }
+
+    /// Changes the bit error rate from now on (a campaign's noise burst).
+    pub fn set_bit_error_rate(&mut self, ber: f64) {
+        self.bit_error_rate = ber;
     }
 
     /// Attaches a node; returns its index.
@@ -285,6 +476,9 @@ impl<M: Module> Bus<M> {
             irqs: VecDeque::new(),
             last_req: None,
             cpu,
+            stalled_until: 0,
+            partitioned: false,
+            guardian: None,
         });
         // Place 1 + i of node i fits the key's PLACE_BITS for any real bus: module indices
         // are 8-bit.
@@ -376,8 +570,15 @@ impl<M: Module> Bus<M> {
     fn push_irq(&mut self, n: usize, t: Nanos, ev: Ev) {
         let seq = self.next_seq();
         if let Some(node) = self.nodes.get_mut(n) {
-            debug_assert!(node.irqs.back().is_none_or(|&(b, _)| key_time(b) <= t));
-            node.irqs.push_back((key(t, seq), ev));
+            // Appending keeps the order (fixed latency), except for interrupts a stall
+            // deferred: those go in their place.
+            let k = key(t, seq);
+            let at = node
+                .irqs
+                .iter()
+                .rposition(|&(b, _)| b <= k)
+                .map_or(0, |p| p + 1);
+            node.irqs.insert(at, (k, ev));
         }
         self.refresh_key(n);
     }
@@ -497,15 +698,78 @@ impl<M: Module> Bus<M> {
     }
 
     fn maybe_start_arbitration(&mut self) {
+        if self.stuck.is_some() {
+            // A dominant bus never becomes idle: nothing starts, nothing recovers.
+            return;
+        }
         if let State::Idle { from } = self.state {
-            if self.nodes.iter().any(|n| n.can.has_pending()) {
+            // A bus-off, cut-off or guarded-off controller's loaded mailboxes start nothing.
+            if self
+                .nodes
+                .iter()
+                .any(|n| n.can.has_pending() && transmits(n))
+            {
+                // A pending idle-recovery check gives way: the start of frame counts
+                // the recessive run for every bus-off controller.
+                if matches!(self.bus_ev, Some((_, Ev::IdleRecover))) {
+                    self.bus_ev = None;
+                    if let Some(k) = self.keys.first_mut() {
+                        *k = NONE;
+                    }
+                }
                 // Pending frames wait for the intermission to end, then start together.
                 let sof = from.max(self.now);
+                let idle = (sof - from) / self.bit_ns().max(1);
+                self.recessive_run = crate::confinement::TRAILING_RECESSIVE_BITS + idle;
                 self.state = State::Arbitrating { sof };
                 let t = sof + self.bit_ns();
                 self.push_bus(t, Ev::ArbDecide);
+            } else if self.bus_ev.is_none() {
+                // An idle bus still recovers bus-off controllers: wake up when the first
+                // has seen its 128 runs of 11 recessive bits.
+                let left = self
+                    .nodes
+                    .iter()
+                    .filter(|n| n.can.conf.is_bus_off())
+                    .map(|n| n.can.conf.recovery_bits_left())
+                    .min();
+                if let Some(left) = left {
+                    let more = left.saturating_sub(crate::confinement::TRAILING_RECESSIVE_BITS);
+                    let bits = u32::try_from(more).unwrap_or(u32::MAX);
+                    let t = self
+                        .now
+                        .max(from.saturating_add(bits_to_ns(bits, self.bitrate)));
+                    self.push_bus(t, Ev::IdleRecover);
+                }
             }
         }
+    }
+
+    /// The bus stayed idle until now: bus-off controllers whose recovery completed
+    /// within this recessive run recover (the others count the run at the next start of
+    /// frame, or at the next check).
+    fn idle_recover(&mut self) {
+        let State::Idle { from } = self.state else {
+            return;
+        };
+        if self.stuck.is_some() {
+            return;
+        }
+        let idle = self.now.saturating_sub(from) / self.bit_ns().max(1);
+        let run = crate::confinement::TRAILING_RECESSIVE_BITS + idle;
+        for n in 0..self.nodes.len() {
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
+            if node.can.conf.is_bus_off()
+                && node.can.conf.recovery_bits_left() <= run
+                && node.can.conf.recessive(run)
+            {
+                let t = self.now + node.setup.irq_latency_ns;
+                self.push_irq(n, t, Ev::ErrIrq { node: n });
+            }
+        }
+        self.maybe_start_arbitration();
     }
 
     fn start(&mut self) {
@@ -536,6 +800,25 @@ impl<M: Module> Bus<M> {
 
     fn handle(&mut self, ev: Ev) {
         let now = self.now;
+        // A stalled node (interrupts masked) takes its interrupts when the stall ends.
+        if let Some(n) = match ev {
+            Ev::Wake { node }
+            | Ev::RxIrq { node, .. }
+            | Ev::TxIrq { node, .. }
+            | Ev::ErrIrq { node } => Some(node),
+            _ => None,
+        } {
+            let until = self.nodes.get(n).map_or(0, |x| x.stalled_until);
+            if now < until {
+                if let Ev::Wake { .. } = ev {
+                    let k = key(until, self.next_seq());
+                    self.set_wake(n, Some(k));
+                } else {
+                    self.push_irq(n, until, ev);
+                }
+                return;
+            }
+        }
         // With a modelled CPU, interrupts become jobs on it; their effects come back as
         // `Ev::Cpu` when the modelled execution reaches them.
         if let Some(n) = match ev {
@@ -574,6 +857,10 @@ impl<M: Module> Bus<M> {
                 });
             }
             Ev::Cpu { node } => self.cpu_step(node),
+            // The status-change interrupt is not costed by the CPU model: it is rare
+            // (level changes only) and runs directly.
+            Ev::ErrIrq { node } => self.error_irq(node),
+            Ev::IdleRecover => self.idle_recover(),
         }
     }
 
@@ -667,14 +954,26 @@ impl<M: Module> Bus<M> {
         let State::Arbitrating { sof } = self.state else {
             return;
         };
+        if self.stuck.is_some() {
+            self.state = State::Idle { from: self.now };
+            return;
+        }
+        let now = self.now;
         // Reused buffer: this runs once per frame and must not allocate.
         let mut offers = std::mem::take(&mut self.offers);
         offers.clear();
-        offers.extend(self.nodes.iter().enumerate().filter_map(|(n, node)| {
-            node.can
-                .best_pending()
-                .map(|(mb, p)| (p.frame.id().raw(), n, mb))
+        // A bus-off or cut-off controller does not transmit; a guardian may stop it.
+        offers.extend(self.nodes.iter_mut().enumerate().filter_map(|(n, node)| {
+            transmits(node).then_some(())?;
+            let (mb, p) = node.can.best_pending()?;
+            if let Some(g) = node.guardian.as_mut() {
+                g.admit(now, p.frame.id()).then_some(())?;
+            }
+            Some((p.frame.id().raw(), n, mb))
         }));
+        // The start of frame ended the recessive run: a controller that recovers with it
+        // joins only the next arbitration.
+        self.count_recessive();
         let Some(&(win_id, win_node, win_mb)) = offers.iter().min() else {
             // Everything was aborted during the SOF bit.
             self.state = State::Idle { from: self.now };
@@ -714,6 +1013,9 @@ impl<M: Module> Bus<M> {
         let Some(p) = node.can.mailbox(win_mb) else {
             return;
         };
+        if let Some(g) = node.guardian.as_mut() {
+            g.sent();
+        }
         node.can.on_wire = Some(win_mb);
         let bits = exact_bits(&p.frame);
         let body = bits - INTERMISSION_BITS;
@@ -727,12 +1029,30 @@ impl<M: Module> Bus<M> {
                 end_bits = k + ERROR_FRAME_BITS;
             }
         }
+        let mut rejects = 0u64;
+        if ok && self.eof_error_rate > 0.0 {
+            for (n, node) in self.nodes.iter().enumerate() {
+                if n != win_node
+                    && n < 64
+                    && !node.partitioned
+                    && !node.can.conf.is_bus_off()
+                    && self.rng.unit() < self.eof_error_rate
+                {
+                    rejects |= 1 << n;
+                }
+            }
+            if rejects != 0 {
+                // The error flag starts in the last bit of EOF.
+                end_bits = body - 1 + ERROR_FRAME_BITS;
+            }
+        }
         self.state = State::Busy {
             node: win_node,
             mb: win_mb,
             sof,
             frame: p.frame,
             ok,
+            rejects,
         };
         let t = sof + bits_to_ns(end_bits, self.bitrate);
         self.push_bus(t, Ev::FrameEnd);
@@ -744,11 +1064,15 @@ impl<M: Module> Bus<M> {
             mb,
             sof,
             frame,
-            ok,
+            ok: rx_ok,
+            rejects,
         } = self.state
         else {
             return;
         };
+        // Receivers outside `rejects` accept a frame that is good up to the last-but-one
+        // bit of EOF; the transmitter needs the whole EOF.
+        let ok = rx_ok && rejects == 0;
         let now = self.now;
         let ifs = bits_to_ns(INTERMISSION_BITS, self.bitrate);
         self.stats.busy_ns += now - sof + ifs;
@@ -759,6 +1083,7 @@ impl<M: Module> Bus<M> {
                 node: tx,
                 frame,
                 ok,
+                partial: rx_ok && !ok,
             });
         }
         let mut irqs = std::mem::take(&mut self.irqs);
@@ -767,6 +1092,15 @@ impl<M: Module> Bus<M> {
             node.can.on_wire = None;
             let lat = now + node.setup.irq_latency_ns;
             let aborting = node.can.abort_requested.get(mb).copied().unwrap_or(false);
+            let level = node.can.conf.level();
+            if ok {
+                node.can.conf.tx_ok();
+            } else {
+                node.can.conf.tx_error();
+            }
+            if node.can.conf.level() != level {
+                irqs.push((lat, Ev::ErrIrq { node: tx }));
+            }
             let result = if ok {
                 node.can.stats.tx_ok += 1;
                 Some(TxResult::Sent)
@@ -791,10 +1125,36 @@ impl<M: Module> Bus<M> {
                 ));
             }
         }
-        if ok {
-            self.stats.frames_ok += 1;
+        // Every receiver on the bus counts the frame, whatever its filters.
+        for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
+            if node.partitioned {
+                continue;
+            }
+            let level = node.can.conf.level();
+            if rx_ok && rejects & (1u64 << n.min(63)) == 0 {
+                node.can.conf.rx_ok();
+            } else {
+                node.can.conf.rx_error();
+            }
+            if node.can.conf.level() != level {
+                irqs.push((now + node.setup.irq_latency_ns, Ev::ErrIrq { node: n }));
+            }
+        }
+        if !ok && rx_ok {
+            self.stats.eof_errors += 1;
+        }
+        if rx_ok {
+            if ok {
+                self.stats.frames_ok += 1;
+            }
             let mut overruns = Vec::new();
             for (n, node) in self.nodes.iter_mut().enumerate().filter(|(n, _)| *n != tx) {
+                if node.can.conf.is_bus_off()
+                    || node.partitioned
+                    || (n < 64 && rejects & (1u64 << n) != 0)
+                {
+                    continue;
+                }
                 let Some(fifo) = node.can.filter.fifo_for(frame.id().raw()) else {
                     continue;
                 };
@@ -829,7 +1189,7 @@ impl<M: Module> Bus<M> {
         }
         for &(t, ev) in &irqs {
             let n = match ev {
-                Ev::RxIrq { node, .. } | Ev::TxIrq { node, .. } => node,
+                Ev::RxIrq { node, .. } | Ev::TxIrq { node, .. } | Ev::ErrIrq { node } => node,
                 _ => continue,
             };
             self.push_irq(n, t, ev);
@@ -837,6 +1197,32 @@ impl<M: Module> Bus<M> {
         self.irqs = irqs;
         self.state = State::Idle { from: now + ifs };
         self.maybe_start_arbitration();
+    }
+
+    /// Bus-off controllers count the recessive run that preceded this start of frame;
+    /// those that recover report it.
+    fn count_recessive(&mut self) {
+        let run = self.recessive_run;
+        for n in 0..self.nodes.len() {
+            let Some(node) = self.nodes.get_mut(n) else {
+                continue;
+            };
+            if node.can.conf.recessive(run) {
+                let t = self.now + node.setup.irq_latency_ns;
+                self.push_irq(n, t, Ev::ErrIrq { node: n });
+            }
+        }
+    }
+
+    /// Reports the controller's fault-confinement state to the module.
+    fn error_irq(&mut self, n: usize) {
+        let Some(node) = self.nodes.get(n) else {
+            return;
+        };
+        let state = node.can.conf.state();
+        // A module without fault handling keeps its timer.
+        let keep = node.wake.and(node.last_req.map(|r| r.0));
+        self.callback(n, |m, now, can| m.error_state(now, state, can).or(keep));
     }
 
     fn rx_irq(&mut self, n: usize, fifo: usize) {

@@ -85,6 +85,8 @@ pub struct SimController {
     pub filter: Filter,
     /// Counters.
     pub stats: ControllerStats,
+    /// Fault confinement (TEC, REC, bus-off).
+    pub conf: crate::confinement::Confinement,
 }
 
 impl SimController {
@@ -101,6 +103,7 @@ impl SimController {
             nart,
             filter,
             stats: ControllerStats::default(),
+            conf: crate::confinement::Confinement::default(),
         }
     }
 
@@ -133,6 +136,19 @@ impl SimController {
     /// Pending mailbox `mb`, if loaded.
     pub fn mailbox(&self, mb: usize) -> Option<Pending> {
         self.mailboxes.get(mb).copied().flatten()
+    }
+
+    /// Power loss: pending mailboxes and received frames are gone (a frame already on
+    /// the wire completes: the bus owns it from its start of frame).
+    pub(crate) fn power_off(&mut self) {
+        for mb in 0..MAILBOXES {
+            if self.on_wire != Some(mb) {
+                self.take_mailbox(mb);
+            }
+        }
+        for q in &mut self.fifos {
+            q.clear();
+        }
     }
 
     pub(crate) fn take_mailbox(&mut self, mb: usize) -> Option<Pending> {

@@ -164,6 +164,7 @@ pub fn schedule(
                             node: m.node,
                             frame,
                             ok: true,
+                            partial: false,
                         };
                         meter.frame(&w);
                         sink(&w);

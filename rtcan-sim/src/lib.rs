@@ -12,16 +12,20 @@
 )]
 
 pub mod bus;
+pub mod campaign;
 pub mod candump;
 pub mod chains;
 pub mod clock;
 pub mod compare;
+pub mod confinement;
 pub mod controller;
 pub mod cpu;
 pub mod cpu_compare;
 pub mod decimate;
 pub mod decode;
+pub mod fault;
 pub mod fixed;
+pub mod guardian;
 pub mod histogram;
 pub mod ideal;
 pub mod live;
@@ -37,6 +41,7 @@ pub mod run;
 pub mod session;
 pub mod slots;
 pub mod svg;
+pub mod sync_watch;
 pub mod tables;
 pub mod traffic;
 pub mod triskar;

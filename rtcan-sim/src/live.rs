@@ -39,7 +39,7 @@ impl Live {
         // A wall far away, so a host can drive for a while.
         cfg.wall_x_m = 1000.0;
         let shared = triskar::new_shared(&cfg);
-        let mut bus = triskar::build_bus(&cfg, &shared);
+        let mut bus = triskar::build_bus(&cfg, &shared)?;
         bus.record_wire = true;
         Ok(Live {
             bus,

@@ -598,6 +598,7 @@ mod tests {
                 node: 0,
                 frame: Frame::from_parts(CanId::new(0, MsgId(0x140), 0).unwrap(), 8, d).unwrap(),
                 ok: true,
+                partial: false,
             }
         };
         // Releases every ms from 0 to 8 ms (deadline inside the window); instance 3 is

@@ -150,6 +150,9 @@ pub struct UserScenario {
     pub robot: std::path::PathBuf,
     /// Patterns and processes in file order.
     pub traffic: Vec<(String, GenKind)>,
+    /// Scripted faults (`fault::parse` syntax, the robot's module names), e.g.
+    /// `faults = ["node3:stuck@1s", "node3:release@2s"]`.
+    pub faults: Vec<String>,
 }
 
 fn duration(v: &toml_edit::Item, what: &str) -> Result<Nanos, String> {
@@ -203,9 +206,17 @@ pub fn parse_user(text: &str, dir: &std::path::Path) -> Result<UserScenario, Str
             traffic.push((pattern.to_string(), kind));
         }
     }
+    let mut faults = Vec::new();
+    if let Some(f) = doc.get("faults") {
+        let bad = "`faults` must be an array of strings like \"node3:stuck@1s\"";
+        for v in f.as_array().ok_or(bad)?.iter() {
+            faults.push(v.as_str().ok_or(bad)?.to_string());
+        }
+    }
     Ok(UserScenario {
         robot: dir.join(robot),
         traffic,
+        faults,
     })
 }
 

@@ -39,6 +39,12 @@ pub struct SimConfig {
     /// Modelled CPU of every module (`None`: handlers take no time but
     /// `irq_latency_ns`; with a model the latency comes from it, `cpu.rs`).
     pub cpu: Option<crate::cpu::CpuModel>,
+    /// Per receiver and frame, probability of an error only it sees in the last-but-one
+    /// bit of EOF (`Bus::set_eof_error_rate`; 0 = none).
+    pub eof_error_rate: f64,
+    /// Bus-level faults (`fault::apply_bus`: stuck, partition, stall) at their times
+    /// (a scenario file's `faults`).
+    pub faults: Vec<crate::fault::Fault>,
 }
 
 impl Default for SimConfig {
@@ -53,6 +59,8 @@ impl Default for SimConfig {
             record_wire: true,
             wire_log: None,
             cpu: None,
+            eof_error_rate: 0.0,
+            faults: Vec::new(),
         }
     }
 }
@@ -258,6 +266,7 @@ fn run_bus<'t, M: Module>(
 ) -> Result<Run, String> {
     let bitrate = sc.bus().map_or(1_000_000, |b| b.bitrate);
     let mut bus = Bus::new(bitrate, cfg.bit_error_rate, cfg.seed);
+    bus.set_eof_error_rate(cfg.eof_error_rate);
     for (n, t) in sc.tables.iter().enumerate() {
         let clock = cfg.clock(n);
         let gens = sc.gens.get(n).map_or(&[][..], Vec::as_slice);
@@ -286,8 +295,21 @@ fn run_bus<'t, M: Module>(
     let mut kept = Vec::new();
     let mut ov = 0;
     let mut t = 0;
+    let mut faults = cfg.faults.clone();
+    faults.sort_by_key(|f| f.at);
+    let mut next_fault = 0;
     while t < end {
         t = (t + CHUNK_NS).min(end);
+        while let Some(f) = faults.get(next_fault).filter(|f| f.at <= t) {
+            bus.run_until(f.at);
+            if !crate::fault::apply_bus(&mut bus, f) {
+                return Err(format!(
+                    "fault {:?}: not supported by this scenario's nodes",
+                    f.kind
+                ));
+            }
+            next_fault += 1;
+        }
         bus.run_until(t);
         // Events before the frames that carry them.
         for n in 0..bus.len() {

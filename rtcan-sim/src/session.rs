@@ -96,6 +96,10 @@ pub struct Request {
     pub sweep: bool,
     /// The bus master stops at this many seconds (triskar2 only).
     pub master_dies_at: Option<f64>,
+    /// Scripted faults, `MODULE:KIND@TIME` (`fault::parse`; triskar2 only).
+    pub faults: Vec<String>,
+    /// Run the fault campaign (`campaign`) instead: every case for `cfg.seconds`.
+    pub campaign: bool,
 }
 
 /// Simulated time against the time it took.
@@ -169,6 +173,13 @@ pub enum Report {
         /// Notes for the user (why this scenario ran).
         notes: Vec<String>,
     },
+    /// The fault campaign (`campaign::cases`), one row per case.
+    Campaign {
+        /// The rows, in case order.
+        rows: Vec<crate::campaign::Row>,
+        /// Every case, wall and CPU seconds.
+        speed: Speed,
+    },
     /// The Triskar2 robot.
     Triskar {
         /// The robot file.
@@ -208,8 +219,46 @@ fn run_plan(
     })
 }
 
-/// Runs `req`; `progress(done, total)` hears about each finished sweep point.
+/// The fault campaign on the workspace robot at `path` (`Request::campaign`).
+fn run_campaign(
+    req: &Request,
+    path: &Path,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Report, String> {
+    if req.sweep
+        || req.master_dies_at.is_some()
+        || !req.faults.is_empty()
+        || req.cfg.load != 1.0
+        || req.cfg.bit_error_rate != 0.0
+        || req.cfg.wire_log.is_some()
+    {
+        return Err(
+            "--campaign runs the workspace robot with its own faults: it takes only \
+             [robot.toml] [--seconds N] [--seed S] [--json] and the --cpu options"
+                .into(),
+        );
+    }
+    let plan = load(path)?;
+    triskar::check_plan(&plan).map_err(|why| format!("--campaign: {why}"))?;
+    let n = crate::campaign::cases().len() as f64;
+    let (rows, speed) = timed(req.cfg.seconds * n, || {
+        crate::campaign::run(&plan, &req.cfg, progress)
+    })?;
+    Ok(Report::Campaign { rows, speed })
+}
+
+/// Runs `req`; `progress(done, total)` hears about each finished sweep point (or
+/// campaign case).
 pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Report, String> {
+    if req.campaign {
+        return match &req.which {
+            Which::Triskar { robot, .. } => run_campaign(req, robot, progress),
+            _ => Err(
+                "--campaign runs the workspace robot (triskar2 and rtcan-paper): drop --scenario"
+                    .into(),
+            ),
+        };
+    }
     if let Some(at) = req.master_dies_at {
         if !(at.is_finite() && at >= 0.0) {
             return Err(format!(
@@ -219,6 +268,9 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
         if !matches!(req.which, Which::Triskar { .. }) {
             return Err("--master-dies-at is supported by the triskar2 scenario only".into());
         }
+    }
+    if !req.faults.is_empty() && !matches!(req.which, Which::Triskar { .. }) {
+        return Err("--fault is supported by the triskar2 scenario only".into());
     }
     if req.sweep && req.which != Which::Paper {
         return Err("--sweep is supported by the rtcan-paper scenario only".into());
@@ -261,7 +313,27 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             let user = robot::parse_user(&text, file.parent().unwrap_or(Path::new(".")))?;
             let plan = load(&user.robot)?;
             let traffic = robot::expand(&user, &plan)?;
-            run_plan(&plan, &traffic, req, Vec::new())
+            let names: Vec<&str> = plan.modules.iter().map(|m| m.name.as_str()).collect();
+            let mut req = req.clone();
+            for spec in &user.faults {
+                let f = crate::fault::parse(spec, &names)?;
+                use crate::fault::FaultKind as K;
+                if !matches!(
+                    f.kind,
+                    K::Stuck | K::Release | K::Partition | K::Rejoin | K::Stall(_)
+                ) {
+                    return Err(format!(
+                        "{}: fault `{spec}`: a scenario file's nodes take the bus-level faults \
+                         stuck, release, partition, rejoin and stall=D (module faults run on \
+                         triskar2, `--fault`)",
+                        file.display()
+                    ));
+                }
+                req.cfg.faults.push(f);
+            }
+            crate::fault::bus_actions(&req.cfg.faults)
+                .map_err(|e| format!("{}: {e}", file.display()))?;
+            run_plan(&plan, &traffic, &req, Vec::new())
         }
         Which::Triskar {
             robot: path,
@@ -275,6 +347,11 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
                 if req.master_dies_at.is_some() {
                     return Err(format!(
                         "--master-dies-at is supported by the triskar2 scenario only, and {why}"
+                    ));
+                }
+                if !req.faults.is_empty() {
+                    return Err(format!(
+                        "--fault is supported by the triskar2 scenario only, and {why}"
                     ));
                 }
                 let note = format!(
@@ -293,6 +370,11 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             let mut cfg = TriskarConfig {
                 sim: req.cfg.clone(),
                 gateway_dies_at_s: req.master_dies_at,
+                faults: req
+                    .faults
+                    .iter()
+                    .map(|f| crate::fault::parse(f, &triskar::MODULES))
+                    .collect::<Result<_, _>>()?,
                 ..TriskarConfig::default()
             };
             if !req.seconds_given {
@@ -325,6 +407,8 @@ mod tests {
             seconds_given: true,
             sweep: false,
             master_dies_at: None,
+            faults: Vec::new(),
+            campaign: false,
         }
     }
 
@@ -369,6 +453,60 @@ mod tests {
 }
 
 #[cfg(test)]
+mod fault_file_tests {
+    use super::*;
+
+    fn scenario(dir: &Path, faults: &str) -> PathBuf {
+        let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/../robots/rtcan-paper.toml");
+        let p = dir.join(format!("s{}.toml", faults.len()));
+        std::fs::write(
+            &p,
+            format!("robot = \"{robot}\"\nfaults = [{faults}]\n[traffic]\n\"s_*\" = {{ period = \"20ms\" }}\n"),
+        )
+        .unwrap();
+        p
+    }
+
+    fn hrt_misses(faults: &str, dir: &Path) -> Result<u64, String> {
+        let r = Request {
+            which: Which::File(scenario(dir, faults)),
+            cfg: SimConfig {
+                seconds: 1.0,
+                record_wire: false,
+                ..SimConfig::default()
+            },
+            seconds_given: true,
+            sweep: false,
+            master_dies_at: None,
+            faults: Vec::new(),
+            campaign: false,
+        };
+        match run(&r, &mut |_, _| {})? {
+            Report::Robot { run, .. } => Ok(run.figures.hrt.iter().map(|h| h.misses).sum()),
+            _ => Err("not a robot report".into()),
+        }
+    }
+
+    /// A scenario file scripts the bus-level faults; module faults are refused there.
+    #[test]
+    fn a_scenario_file_scripts_bus_faults() {
+        let dir = std::env::temp_dir().join(format!("rtcan-fault-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        assert_eq!(hrt_misses("", &dir), Ok(0));
+        // The bus held dominant for 200 ms: every HRT occurrence in it is missed.
+        let stuck = hrt_misses("\"node3:stuck@300ms\", \"node3:release@500ms\"", &dir).unwrap();
+        assert!(stuck > 100, "{stuck}");
+        let e = hrt_misses("\"node3:dies@300ms\"", &dir).unwrap_err();
+        assert!(e.contains("bus-level faults"), "{e}");
+        let e = hrt_misses("\"node9:stuck@300ms\"", &dir).unwrap_err();
+        assert!(e.contains("no module `node9`"), "{e}");
+        let e = hrt_misses("\"node3:release@300ms\"", &dir).unwrap_err();
+        assert!(e.contains("not stuck"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+#[cfg(test)]
 mod load_tests {
     use super::*;
 
@@ -397,6 +535,8 @@ mod load_tests {
             seconds_given: true,
             sweep: false,
             master_dies_at: None,
+            faults: Vec::new(),
+            campaign: false,
         };
         let one = events(&run(&r, &mut |_, _| {}).unwrap());
         r.cfg.load = 0.5;

@@ -485,6 +485,17 @@ impl<const RX: usize, const ARENA: usize> Module for EngineNode<'_, RX, ARENA> {
     fn rx_overrun(&mut self, _now: Nanos) {
         self.engine.on_rx_overrun();
     }
+
+    fn error_state(
+        &mut self,
+        now: Nanos,
+        state: rtcan_core::confinement::ErrorState,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        self.host.now_local = now;
+        self.engine.on_error_state(now, state, can, &mut self.host);
+        self.next(now, can)
+    }
 }
 
 /// A module sized by its tables (one of `TIERS`).
@@ -581,6 +592,14 @@ impl Module for SizedNode<'_> {
     }
     fn rx_overrun(&mut self, now: Nanos) {
         each!(self, n => n.rx_overrun(now))
+    }
+    fn error_state(
+        &mut self,
+        now: Nanos,
+        state: rtcan_core::confinement::ErrorState,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        each!(self, n => n.error_state(now, state, can))
     }
 }
 

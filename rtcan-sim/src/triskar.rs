@@ -30,7 +30,7 @@ pub mod module;
 pub mod physics;
 pub mod report;
 
-use module::{App, Fate, Script, Shared, SimModule, SrtLog, TriskarModule};
+use module::{App, Boot, Fate, Script, Shared, SimModule, SrtLog, TriskarModule};
 use physics::{PathSample, Physics};
 
 /// Scenario parameters.
@@ -51,6 +51,10 @@ pub struct TriskarConfig {
     /// Any module (bus index, seconds) stops executing then (failure injection). The run
     /// then steps one cycle at a time and records the supervision table (`supervision`).
     pub module_dies_at: Option<(usize, f64)>,
+    /// Scripted faults (`fault::parse`, `--fault`), on top of the two above.
+    pub faults: Vec<crate::fault::Fault>,
+    /// Every module has a bus guardian (`guardian.rs`).
+    pub guardian: bool,
 }
 
 impl Default for TriskarConfig {
@@ -66,6 +70,8 @@ impl Default for TriskarConfig {
             command_until_s: 8.0,
             gateway_dies_at_s: None,
             module_dies_at: None,
+            faults: Vec::new(),
+            guardian: false,
         }
     }
 }
@@ -84,6 +90,20 @@ pub struct ModuleReport {
     pub sync_master: u8,
     /// Motor modules: measured wheel speed (rad/s) and whether the controller is safe.
     pub motor: Option<(f32, bool)>,
+    /// Sends the sync at the end of the run (and is running).
+    pub master: bool,
+    /// Times the module booted again after a scripted fault.
+    pub reboots: u32,
+    /// Times the module left the safe state after it had been required.
+    pub safe_exits: u32,
+    /// Global times of its first safe-state entry and of its last exit.
+    pub safe_times: (Option<Nanos>, Option<Nanos>),
+    /// Fault confinement at the end and bus-off entries of its controller.
+    pub error_state: rtcan_core::confinement::ErrorState,
+    /// Frames its controller lost to full receive FIFOs.
+    pub fifo_overruns: u64,
+    /// Its bus guardian cut it off (global time), if it has one and did.
+    pub guardian_cut_at: Option<Nanos>,
 }
 
 /// The result of a triskar2 run.
@@ -113,6 +133,11 @@ pub struct TriskarRun {
     /// With `module_dies_at`: the module table of the current sync master after every
     /// cycle, as decoded from its topic wire form.
     pub supervision: Vec<SupervisionSample>,
+    /// Sync frames on the wire: cycles with two syncs, longest silence.
+    pub syncs: crate::sync_watch::SyncWatch,
+    /// Frames outside their slots or windows as the last sync on the wire places them,
+    /// whoever sent it (`sync_watch::SlotCheck`), and frames so checked.
+    pub slots_live: (u64, u64),
     pub config: TriskarConfig,
 }
 
@@ -218,6 +243,43 @@ fn supervise(bus: &Bus<Box<dyn TriskarModule>>, t: Nanos) -> Option<SupervisionS
     Some(SupervisionSample { t_ns: t, table })
 }
 
+/// Which modules may send the sync: the configured master and the backups.
+fn master_capable() -> [bool; MODULES.len()] {
+    let ranks = [
+        robot::gateway::BACKUP_RANK,
+        robot::motor1::BACKUP_RANK,
+        robot::motor2::BACKUP_RANK,
+        robot::motor3::BACKUP_RANK,
+        robot::proximity::BACKUP_RANK,
+        robot::psu::BACKUP_RANK,
+    ];
+    let mut out = [false; MODULES.len()];
+    for (n, o) in out.iter_mut().enumerate() {
+        *o = n == usize::from(robot::MASTER) || ranks.get(n).is_some_and(|&r| r > 0);
+    }
+    out
+}
+
+/// Applies one bus-level fault (`fault::bus_actions`) now.
+fn apply_bus_fault(bus: &mut Bus<Box<dyn TriskarModule>>, f: &crate::fault::Fault) {
+    if crate::fault::apply_bus(bus, f) {
+        return;
+    }
+    if let crate::fault::FaultKind::Step(d) = f.kind {
+        if let Some(c) = bus.step_clock(f.module, d) {
+            if let Some(module) = bus.module_mut(f.module) {
+                module.set_clock(c);
+            }
+        }
+    }
+}
+
+/// Time from a slot boundary of the master's clock to its sync's start of frame: the
+/// timer interrupt latency (without a CPU model; with one, the modelled entry).
+fn sync_lead_ns(sim: &SimConfig) -> Nanos {
+    sim.node_irq_latency_ns()
+}
+
 fn s_to_ns(s: f64) -> Nanos {
     (s.max(0.0) * 1e9) as Nanos
 }
@@ -241,11 +303,39 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
     }))
 }
 
-/// The six modules on a fresh bus, each with its firmware's generated filters.
+/// Every scripted fault of `cfg`: `faults`, plus `gateway_dies_at_s` and
+/// `module_dies_at` as `Dies` faults; checked (a script that cannot happen is an error).
+pub fn fault_script(cfg: &TriskarConfig) -> Result<Vec<crate::fault::Fault>, String> {
+    use crate::fault::{Fault, FaultKind};
+    let mut faults = cfg.faults.clone();
+    let dies = |module, at| Fault {
+        module,
+        kind: FaultKind::Dies,
+        at: s_to_ns(at),
+    };
+    faults.extend(cfg.gateway_dies_at_s.map(|at| dies(0, at)));
+    faults.extend(cfg.module_dies_at.map(|(m, at)| dies(m, at)));
+    if let Some(f) = faults.iter().find(|f| f.module >= MODULES.len()) {
+        return Err(format!(
+            "no module {} (modules: {})",
+            f.module,
+            MODULES.join(", ")
+        ));
+    }
+    for n in 0..MODULES.len() {
+        crate::fault::down_intervals(&faults, n)
+            .map_err(|e| format!("{}: {e}", MODULES.get(n).unwrap_or(&"?")))?;
+    }
+    Ok(faults)
+}
+
+/// The six modules on a fresh bus, each with its firmware's generated filters and the
+/// faults of `cfg` (`fault_script`).
 pub(crate) fn build_bus(
     cfg: &TriskarConfig,
     shared: &Rc<RefCell<Shared>>,
-) -> Bus<Box<dyn TriskarModule>> {
+) -> Result<Bus<Box<dyn TriskarModule>>, String> {
+    let faults = fault_script(cfg)?;
     let bitrate = robot::BUS.bitrate;
     let mut bus: Bus<Box<dyn TriskarModule>> =
         Bus::new(bitrate, cfg.sim.bit_error_rate, cfg.sim.seed);
@@ -254,79 +344,68 @@ pub(crate) fn build_bus(
         let clock = cfg.sim.clock(n);
         let now = clock.local(0);
         let sh = shared.clone();
-        let mut m: Box<dyn TriskarModule> = match n {
-            0 => {
+        // One arm per module: the generated engine, host, statics and the module's app,
+        // and how to boot them again (a module that returns after a fault).
+        macro_rules! module {
+            ($m:ident, $name:literal, $app:expr, $srt:expr) => {{
                 let mut m = SimModule::new(
-                    "gateway",
-                    robot::gateway::engine(now),
-                    robot::gateway::host(),
-                    App::Gateway(app::GatewayApp::new()),
-                    &robot::gateway::STATUS,
+                    $name,
+                    robot::$m::engine(now),
+                    robot::$m::host(),
+                    $app,
+                    &robot::$m::STATUS,
                     clock,
                     sh,
-                    vec![(robot::gateway::topics::tx::TELEOP, || {
-                        robot::gateway::topics::TELEOP.stats()
-                    })],
+                    $srt,
                 );
-                m.dies_at = cfg.gateway_dies_at_s.map(s_to_ns);
+                m.boot = Some(Boot {
+                    engine: robot::$m::engine,
+                    host: robot::$m::host,
+                    app: || $app,
+                    reset: robot::$m::reset,
+                });
+                m.down = crate::fault::down_intervals(&faults, n)?;
+                m.babble_from = crate::fault::babble_from(&faults, n);
                 Box::new(m)
-            }
-            1 => Box::new(SimModule::new(
+            }};
+        }
+        let m: Box<dyn TriskarModule> = match n {
+            0 => module!(
+                gateway,
+                "gateway",
+                App::Gateway(app::GatewayApp::new()),
+                vec![(robot::gateway::topics::tx::TELEOP, || {
+                    robot::gateway::topics::TELEOP.stats()
+                })]
+            ),
+            1 => module!(
+                motor1,
                 "motor1",
-                robot::motor1::engine(now),
-                robot::motor1::host(),
                 App::Motor1(app::Motor1App::new()),
-                &robot::motor1::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
-            2 => Box::new(SimModule::new(
+                Vec::new()
+            ),
+            2 => module!(
+                motor2,
                 "motor2",
-                robot::motor2::engine(now),
-                robot::motor2::host(),
                 App::Motor2(app::Motor2App::new()),
-                &robot::motor2::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
-            3 => Box::new(SimModule::new(
+                Vec::new()
+            ),
+            3 => module!(
+                motor3,
                 "motor3",
-                robot::motor3::engine(now),
-                robot::motor3::host(),
                 App::Motor3(app::Motor3App::new()),
-                &robot::motor3::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
-            4 => Box::new(SimModule::new(
+                Vec::new()
+            ),
+            4 => module!(
+                proximity,
                 "proximity",
-                robot::proximity::engine(now),
-                robot::proximity::host(),
                 App::Proximity(app::ProximityApp::new()),
-                &robot::proximity::STATUS,
-                clock,
-                sh,
                 vec![(robot::proximity::topics::tx::VELOCITY, || {
                     robot::proximity::topics::VELOCITY.stats()
-                })],
-            )),
-            _ => Box::new(SimModule::new(
-                "psu",
-                robot::psu::engine(now),
-                robot::psu::host(),
-                App::Psu(app::PsuApp::new()),
-                &robot::psu::STATUS,
-                clock,
-                sh,
-                Vec::new(),
-            )),
+                })]
+            ),
+            _ => module!(psu, "psu", App::Psu(app::PsuApp::new()), Vec::new()),
         };
-        if let Some((_, at)) = cfg.module_dies_at.filter(|&(k, _)| k == n) {
-            m.set_dies_at(Some(s_to_ns(at)));
-        }
         let filters = match n {
             0 => robot::gateway::FILTERS,
             1 => robot::motor1::FILTERS,
@@ -346,17 +425,47 @@ pub(crate) fn build_bus(
             },
         );
     }
-    bus
+    Ok(bus)
 }
 
 fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
     let shared = new_shared(cfg);
-    let mut bus = build_bus(cfg, &shared);
+    let mut bus = build_bus(cfg, &shared)?;
+    bus.set_eof_error_rate(cfg.sim.eof_error_rate);
+    let faults = fault_script(cfg)?;
+    let actions = crate::fault::bus_actions(&faults)?;
+    let mut next_action = 0;
+    if cfg.guardian {
+        let capable = master_capable();
+        for (n, g) in
+            crate::guardian::for_scenario(sc, |n| capable.get(n).copied().unwrap_or(false))
+                .into_iter()
+                .enumerate()
+        {
+            bus.set_guardian(n, g);
+        }
+    }
     let end = cfg.sim.end_ns();
     let win = window(&cfg.sim);
     let mut meter = Meter::new(&sc.topics, win, bus.bit_ns());
     let mut srt = SrtMatcher::new(&sc.topics, win);
-    let until = cfg.gateway_dies_at_s.map_or(Nanos::MAX, s_to_ns);
+    // The slot check on the configured master's clock: only until it first fails.
+    let until = faults
+        .iter()
+        .filter(|f| f.module == sc.master)
+        .map(|f| f.at)
+        .min()
+        .unwrap_or(Nanos::MAX);
+    let mut syncs = crate::sync_watch::SyncWatch::new(sc.bus().map_or(0, |b| b.cycle_ns()));
+    // The same check anchored on the wire, whoever the master: the sync leaves one timer
+    // interrupt latency into slot 0. The sender's own frames follow its own grid: its
+    // latency to the sync's start of frame varies (the guard covers it, PROTOCOL §5.3)
+    // and its clock drifts from the wire's grid by up to drift_ppm over a cycle.
+    let mut live = sc.bus().map(|b| {
+        let drift = (b.cycle_ns() as f64 * cfg.sim.drift_ppm.abs() / 1e6) as Nanos;
+        crate::sync_watch::SlotCheck::new(b.slot_ns, b.slots_per_cycle, sync_lead_ns(&cfg.sim))
+            .with_tolerance(b.guard_ns + b.bit_ns() + drift)
+    });
     let mut log = match &cfg.sim.wire_log {
         Some(p) => Some((
             std::io::BufWriter::new(
@@ -378,6 +487,12 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
     // memory does not grow with the run (docs/SIM.md, Memory).
     while t < end {
         t = (t + step).min(end);
+        // The bus-level faults at their times within this chunk.
+        while let Some(&f) = actions.get(next_action).filter(|f| f.at <= t) {
+            bus.run_until(f.at);
+            apply_bus_fault(&mut bus, &f);
+            next_action += 1;
+        }
         bus.run_until(t);
         if cfg.module_dies_at.is_some() {
             supervision.extend(supervise(&bus, t));
@@ -385,6 +500,10 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         for w in &bus.wire {
             meter.frame(w);
             srt.frame(w);
+            syncs.frame(w);
+            if let Some(c) = &mut live {
+                c.frame(w);
+            }
         }
         for n in 0..bus.len() {
             if let Some(m) = bus.module_mut(n) {
@@ -437,8 +556,21 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
             safe_reason: m.status().safe_reason(),
             sync_master: m.status().sync_master(),
             motor: m.app().motor(),
+            master: m.is_master(),
+            reboots: m.reboots(),
+            safe_exits: m.safe_exits(),
+            safe_times: m.safe_times(),
+            error_state: bus
+                .controller(n)
+                .map(|c| c.conf.state())
+                .unwrap_or_default(),
+            fifo_overruns: bus
+                .controller(n)
+                .map_or(0, |c| c.stats.rx_overrun.iter().sum()),
+            guardian_cut_at: bus.guardian(n).and_then(|g| g.tripped.map(|t| t.0)),
         });
     }
+    syncs.finish(end);
     let mut figures = meter.finish();
     figures.srt = srt.finish();
     let mut sh = shared.borrow_mut();
@@ -475,6 +607,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         ),
         modules,
         supervision,
+        syncs,
+        slots_live: live.map_or((0, 0), |c| (c.bad, c.checked)),
         config: cfg.clone(),
     })
 }

@@ -180,6 +180,16 @@ pub trait Inspect {
     fn slot_clock(&self) -> &SlotClock;
     /// Times the safe state became required after the module had been running.
     fn safe_trips(&self) -> u32;
+    /// Sends the sync (and is running).
+    fn is_master(&self) -> bool;
+    /// Times booted again after a scripted fault.
+    fn reboots(&self) -> u32;
+    /// Times the safe state was left (required, then no longer required).
+    fn safe_exits(&self) -> u32;
+    /// Global times of the first safe-state entry and of the last exit, if any.
+    fn safe_times(&self) -> (Option<Nanos>, Option<Nanos>);
+    /// Its local clock changed (a clock step, `Bus::step_clock`).
+    fn set_clock(&mut self, clock: NodeClock);
     fn safe_now(&self) -> bool;
     fn app(&self) -> &App;
     /// SRT publications so far, per transmit index (drained by the measurement).
@@ -223,6 +233,12 @@ pub struct SrtLog {
 }
 
 impl SrtLog {
+    /// The module lost power: publications not yet sent are lost with it.
+    pub fn power_lost(&mut self) {
+        let lost = self.pending.drain(..).map(|at| (at, Fate::Dropped));
+        self.done.extend(lost);
+    }
+
     /// Accounts for the change from `old` to `new` seen at global time `now`.
     pub fn update(&mut self, old: &TopicStats, new: &TopicStats, now: Nanos) {
         let d = |a: u32, b: u32| b.wrapping_sub(a);
@@ -251,6 +267,14 @@ impl SrtLog {
     }
 }
 
+/// How a module boots: its generated engine, host and statics reset, and its app.
+pub struct Boot<const RX: usize, const AR: usize, const Q: usize> {
+    pub engine: fn(Nanos) -> Engine<'static, RX, AR, Q>,
+    pub host: fn() -> ModuleHost<'static>,
+    pub app: fn() -> App,
+    pub reset: fn(),
+}
+
 /// A simulated module, generic over the engine sizes the generated code chose.
 pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     pub name: &'static str,
@@ -260,13 +284,27 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     pub status: &'static SystemStatus,
     pub clock: NodeClock,
     pub shared: Rc<RefCell<Shared>>,
-    /// The module stops executing at this global time (power loss), if set.
-    pub dies_at: Option<Nanos>,
+    /// Global intervals `[from, to)` in which the module is down (power loss; `to` =
+    /// `Nanos::MAX`: never returns), in time order (`fault::down_intervals`).
+    pub down: Vec<(Nanos, Nanos)>,
+    /// How to boot the module again when it returns (`None`: it cannot return).
+    pub boot: Option<Boot<RX, AR, Q>>,
+    /// Index in `down` of the interval the module is in or next enters.
+    next_down: usize,
+    /// Times the module booted again.
+    pub reboots: u32,
+    /// Down (or babbling: not running its software) at the last event it saw.
+    dead: bool,
+    /// Global time from which the module babbles (`fault::FaultKind::Babble`).
+    pub babble_from: Option<Nanos>,
     /// SRT topics to log: tx index and how to read the topic's publication count.
     pub srt: Vec<SrtCounter>,
     pub srt_log: Vec<(u8, SrtLog)>,
     was_ok: bool,
     trips: u32,
+    exits: u32,
+    first_trip_at: Option<Nanos>,
+    last_exit_at: Option<Nanos>,
 }
 
 impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
@@ -290,7 +328,12 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             status,
             clock,
             shared,
-            dies_at: None,
+            down: Vec::new(),
+            boot: None,
+            next_down: 0,
+            reboots: 0,
+            dead: false,
+            babble_from: None,
             srt: srt
                 .into_iter()
                 .map(|(tx, f)| (tx, f, TopicStats::default()))
@@ -298,6 +341,68 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             srt_log,
             was_ok: false,
             trips: 0,
+            exits: 0,
+            first_trip_at: None,
+            last_exit_at: None,
+        }
+    }
+
+    /// Whether the module runs at local time `now`, after booting it again if it has
+    /// just returned; `Err(wake)` while down: the local time to wake at (its return).
+    fn alive(&mut self, now: Nanos, can: &mut SimController) -> Result<(), Option<Nanos>> {
+        let global = self.clock.global_at(now);
+        while let Some(&(from, to)) = self.down.get(self.next_down) {
+            if global < from {
+                break;
+            }
+            if global < to {
+                // Power is off: the controller loses what it held.
+                self.dead = true;
+                can.power_off();
+                return Err((to != Nanos::MAX).then(|| self.clock.local(to)));
+            }
+            can.power_off();
+            self.next_down += 1;
+            self.reboot(now);
+        }
+        self.dead = false;
+        if self.babble_from.is_some_and(|b| global >= b) {
+            // The software ignores the schedule: every free mailbox gets the flood frame
+            // (reloaded as each one is sent); the engine no longer runs.
+            let frame = rtcan::core::CanId::from_raw(crate::fault::BABBLE_RAW)
+                .and_then(|id| Frame::from_parts(id, 8, [0xBA; 8]));
+            for mb in 0..rtcan::core::driver::MAILBOXES {
+                if let (None, Some(f)) = (can.mailbox(mb), frame) {
+                    rtcan::core::Controller::load(can, Mailbox(mb as u8), &f);
+                }
+            }
+            // Still a master? Its sync stops with its software.
+            self.dead = true;
+            return Err(None);
+        }
+        Ok(())
+    }
+
+    /// Power-on again: this module's statics, engine, host and app as at boot; the
+    /// engine listens before it sends (a running master may have taken over).
+    fn reboot(&mut self, now: Nanos) {
+        let Some(boot) = &self.boot else {
+            return;
+        };
+        (boot.reset)();
+        let mut engine = (boot.engine)(now);
+        engine.listen_first();
+        *self.engine = engine;
+        self.host = (boot.host)();
+        self.app = (boot.app)();
+        self.was_ok = false;
+        self.reboots += 1;
+        // The topics' counters start again from zero; what was pending died with it.
+        for (tx, _, seen) in self.srt.iter_mut() {
+            *seen = TopicStats::default();
+            if let Some((_, log)) = self.srt_log.iter_mut().find(|l| l.0 == *tx) {
+                log.power_lost();
+            }
         }
     }
 
@@ -312,10 +417,10 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
     /// After a driver event: physics up to now, the app, the pump into the engine,
     /// the engine's timer; returns the next local wake-up.
     fn run(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
-        let global = self.clock.global_at(now);
-        if self.dies_at.is_some_and(|d| global >= d) {
-            return None;
+        if let Err(wake) = self.alive(now, can) {
+            return wake;
         }
+        let global = self.clock.global_at(now);
         let motor = self.motor_index();
         let app_next = {
             let mut shared = self.shared.borrow_mut();
@@ -336,10 +441,15 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         }
         let safe = self.status.safe_state_required();
         if !safe {
+            if self.trips > self.exits {
+                self.exits += 1;
+                self.last_exit_at = Some(global);
+            }
             self.was_ok = true;
         } else if self.was_ok {
             self.was_ok = false;
             self.trips += 1;
+            self.first_trip_at.get_or_insert(global);
         }
         self.host.pump(&mut self.engine, now, can);
         let e = self.engine.poll(now, can, &mut self.host);
@@ -369,8 +479,8 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
         now: Nanos,
         can: &mut SimController,
     ) -> Option<Nanos> {
-        if self.dies_at.is_some_and(|d| self.clock.global_at(now) >= d) {
-            return None;
+        if let Err(wake) = self.alive(now, can) {
+            return wake;
         }
         self.engine.on_rx(frame, sof, can, &mut self.host);
         self.run(now, can)
@@ -383,8 +493,8 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
         now: Nanos,
         can: &mut SimController,
     ) -> Option<Nanos> {
-        if self.dies_at.is_some_and(|d| self.clock.global_at(now) >= d) {
-            return None;
+        if let Err(wake) = self.alive(now, can) {
+            return wake;
         }
         self.engine
             .on_tx_done(mailbox, result, now, can, &mut self.host);
@@ -392,7 +502,22 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
     }
 
     fn rx_overrun(&mut self, _now: Nanos) {
-        self.engine.on_rx_overrun();
+        if !self.dead {
+            self.engine.on_rx_overrun();
+        }
+    }
+
+    fn error_state(
+        &mut self,
+        now: Nanos,
+        state: rtcan::core::confinement::ErrorState,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        if let Err(wake) = self.alive(now, can) {
+            return wake;
+        }
+        self.engine.on_error_state(now, state, can, &mut self.host);
+        self.run(now, can)
     }
 }
 
@@ -412,6 +537,21 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     fn safe_trips(&self) -> u32 {
         self.trips
     }
+    fn is_master(&self) -> bool {
+        !self.dead && self.engine.is_master()
+    }
+    fn reboots(&self) -> u32 {
+        self.reboots
+    }
+    fn safe_exits(&self) -> u32 {
+        self.exits
+    }
+    fn safe_times(&self) -> (Option<Nanos>, Option<Nanos>) {
+        (self.first_trip_at, self.last_exit_at)
+    }
+    fn set_clock(&mut self, clock: NodeClock) {
+        self.clock = clock;
+    }
     fn safe_now(&self) -> bool {
         self.status.safe_state_required()
     }
@@ -428,10 +568,12 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
         rtcan::pubsub::EngineHealth::new(self.engine.counters(), &self.engine.error_state())
     }
     fn set_dies_at(&mut self, at: Option<Nanos>) {
-        self.dies_at = at;
+        self.down = at.map(|a| vec![(a, Nanos::MAX)]).unwrap_or_default();
+        self.next_down = 0;
     }
     fn alive_at(&self, g: Nanos) -> bool {
-        self.dies_at.is_none_or(|d| g < d)
+        !self.down.iter().any(|&(from, to)| g >= from && g < to)
+            && self.babble_from.is_none_or(|b| g < b)
     }
 }
 
@@ -466,5 +608,13 @@ impl Module for Box<dyn TriskarModule> {
     }
     fn rx_overrun(&mut self, now: Nanos) {
         (**self).rx_overrun(now)
+    }
+    fn error_state(
+        &mut self,
+        now: Nanos,
+        state: rtcan::core::confinement::ErrorState,
+        can: &mut SimController,
+    ) -> Option<Nanos> {
+        (**self).error_state(now, state, can)
     }
 }

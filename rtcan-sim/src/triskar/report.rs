@@ -24,6 +24,39 @@ pub fn triskar_text(r: &TriskarRun) -> String {
         c.gateway_dies_at_s
             .map_or(String::new(), |t| format!("; gateway (master) dies at {t:.1} s"))
     );
+    if !c.faults.is_empty() || c.guardian {
+        let specs: Vec<String> = c.faults.iter().map(|f| f.spec(&super::MODULES)).collect();
+        let _ = writeln!(
+            o,
+            "faults: {}{}",
+            if specs.is_empty() {
+                "none".to_string()
+            } else {
+                specs.join(" ")
+            },
+            if c.guardian {
+                "; every module has a bus guardian"
+            } else {
+                ""
+            }
+        );
+    }
+    let masters: Vec<&str> = r
+        .modules
+        .iter()
+        .filter(|m| m.master)
+        .map(|m| m.name)
+        .collect();
+    let _ = writeln!(
+        o,
+        "sync on the wire: {} syncs, {} cycles with two syncs, longest gap {:.1} ms; frames out of their slots (wire check) {} of {}; masters at the end: {}",
+        r.syncs.syncs,
+        r.syncs.doubled,
+        r.syncs.longest_gap.0 as f64 / 1e6,
+        r.slots_live.0,
+        r.slots_live.1,
+        if masters.is_empty() { "none".to_string() } else { masters.join(" ") }
+    );
     let _ = writeln!(o);
     o.push_str(&text(&r.run));
     let _ = writeln!(o);
@@ -158,7 +191,7 @@ pub fn triskar_json(r: &TriskarRun, speed_x: f64) -> String {
         })
         .collect();
     format!(
-        "{{\"scenario\":\"triskar2\",\"seconds\":{},\"seed\":{},\"wall_x\":{},\"command_vx\":{},\"command_from_s\":{},\"command_until_s\":{},\"gateway_dies_at_s\":{},\"run\":{},\"robot\":{{\"max_x\":{},\"min_gap\":{},\"final_gap\":{},\"stopped_short\":{},\"overrides\":{},\"odometry_rx\":{},\"path\":[{}]}},\"modules\":[{}],\"speed_x_real_time\":{}}}",
+        "{{\"scenario\":\"triskar2\",\"seconds\":{},\"seed\":{},\"wall_x\":{},\"command_vx\":{},\"command_from_s\":{},\"command_until_s\":{},\"gateway_dies_at_s\":{},\"run\":{},\"robot\":{{\"max_x\":{},\"min_gap\":{},\"final_gap\":{},\"stopped_short\":{},\"overrides\":{},\"odometry_rx\":{},\"path\":[{}]}},\"modules\":[{}],\"faults\":[{}],\"guardian\":{},\"sync\":{{\"syncs\":{},\"doubled_syncs\":{},\"longest_sync_gap_ms\":{},\"slot_violations\":{},\"slots_checked\":{},\"masters_at_end\":[{}]}},\"speed_x_real_time\":{}}}",
         c.sim.seconds,
         c.sim.seed,
         num(c.wall_x_m),
@@ -175,6 +208,23 @@ pub fn triskar_json(r: &TriskarRun, speed_x: f64) -> String {
         r.odometry_rx,
         path.join(","),
         modules.join(","),
+        c.faults
+            .iter()
+            .map(|f| format!("\"{}\"", json_str(&f.spec(&super::MODULES))))
+            .collect::<Vec<_>>()
+            .join(","),
+        c.guardian,
+        r.syncs.syncs,
+        r.syncs.doubled,
+        num(r.syncs.longest_gap.0 as f64 / 1e6),
+        r.slots_live.0,
+        r.slots_live.1,
+        r.modules
+            .iter()
+            .filter(|m| m.master)
+            .map(|m| format!("\"{}\"", m.name))
+            .collect::<Vec<_>>()
+            .join(","),
         num(speed_x)
     )
 }
