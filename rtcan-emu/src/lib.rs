@@ -11,8 +11,10 @@ pub mod elf;
 pub mod mcu;
 pub mod periph;
 pub mod report;
+pub mod robot;
 pub mod rtt;
 pub mod scs;
+pub mod serial;
 mod uc;
 
 /// Result of a register access: the value read, or the unknown offset.

@@ -2,7 +2,8 @@
 //! and `bxcan`, with time = instructions retired × cycles per instruction.
 use crate::bxcan::BxCan;
 use crate::elf;
-use crate::periph::{Adc, Afio, Dma, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, Usart, APB1_CAN, PS};
+use crate::periph::{Adc, Afio, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, APB1_CAN, PS};
+use crate::serial::{Dma, Usart, USART1_DR};
 use crate::scs::Scs;
 use crate::uc::*;
 use crate::Access;
@@ -156,8 +157,12 @@ impl State {
                 let port = ((addr - 0x4001_0800) / 0x400) as usize;
                 self.gpio.get(port).ok_or(addr)?.read(addr & 0x3FF)
             }
-            0x4001_3800..=0x4001_3BFF => self.usart1.read(addr & 0x3FF),
-            0x4002_0000..=0x4002_03FF => self.dma1.read(addr & 0x3FF),
+            // USART1 clocked by APB2ENR.USART1EN (bit 14), DMA1 by AHBENR.DMA1EN (bit 0).
+            0x4001_3800..=0x4001_3BFF if self.rcc.apb2enr & (1 << 14) != 0 => {
+                let pclk2 = self.rcc.pclk2();
+                self.usart1.read(addr & 0x3FF, now, pclk2)
+            }
+            0x4002_0000..=0x4002_03FF if self.rcc.ahbenr & 1 != 0 => self.dma1.read(addr & 0x3FF),
             0x4002_1000..=0x4002_13FF => self.rcc.read(addr & 0x3FF),
             0x4002_2000..=0x4002_23FF => self.flash.read(addr & 0x3FF),
             0xE000_1000..=0xE000_1FFF => self.scs.read_dwt(addr & 0xFFF, cyc),
@@ -209,8 +214,13 @@ impl State {
                 let port = ((addr - 0x4001_0800) / 0x400) as usize;
                 self.gpio.get_mut(port).ok_or(addr)?.write(addr & 0x3FF, v)
             }
-            0x4001_3800..=0x4001_3BFF => self.usart1.write(addr & 0x3FF, v),
-            0x4002_0000..=0x4002_03FF => self.dma1.write(addr & 0x3FF, v),
+            0x4001_3800..=0x4001_3BFF if self.rcc.apb2enr & (1 << 14) != 0 => {
+                let pclk2 = self.rcc.pclk2();
+                self.usart1.write(addr & 0x3FF, v, now, pclk2)
+            }
+            0x4002_0000..=0x4002_03FF if self.rcc.ahbenr & 1 != 0 => {
+                self.dma1.write(addr & 0x3FF, v)
+            }
             0x4002_1000..=0x4002_13FF => {
                 let r = self.rcc.write(addr & 0x3FF, v);
                 self.retime();
@@ -615,6 +625,31 @@ impl Mcu {
         unsafe { uc_mem_write(self.uc, u64::from(addr), bytes.as_ptr().cast(), bytes.len()) };
     }
 
+    /// One byte arriving on USART1's RX pin (its stop bit ends now): with CR3.DMAR it
+    /// goes to DMA1 channel 5 and from there to memory (RM0008 §27.3.13, §13.3.7),
+    /// else into RDR. A receiver that is off (or not clocked) loses it.
+    pub fn usart_receive(&mut self, byte: u8) {
+        let st = &mut self.st;
+        if st.rcc.apb2enr & (1 << 14) == 0 || !st.usart1.receiving() {
+            st.usart1.rx_lost += 1;
+            return;
+        }
+        if st.usart1.rx_dma() {
+            // A DMA that is off or not clocked leaves the request pending: the byte sits
+            // in RDR (and the next one overruns), as on the chip.
+            let served = if st.rcc.ahbenr & 1 != 0 {
+                st.dma1.request(4, USART1_DR)
+            } else {
+                None
+            };
+            if let Some(addr) = served {
+                self.write_mem(addr, &[byte]);
+                return;
+            }
+        }
+        self.st.usart1.rx_byte(byte);
+    }
+
     /// Power-on / system reset (ARMv7-M B1.5.5): peripherals to reset values, image in
     /// flash, SRAM cleared, SP and PC from the vector table at 0. Time goes on.
     pub fn reset(&mut self) -> Result<(), EmuError> {
@@ -720,8 +755,14 @@ impl Mcu {
                 st.scs.set_pending(6 + line);
             }
         }
-        if st.usart1.irq() {
+        // USART1: IRQ 37; DMA1 channels 4 and 5: IRQ 14 and 15 (table 63).
+        if st.usart1.irq(now, st.rcc.pclk2()) {
             st.scs.set_pending(37);
+        }
+        for (c, irq) in [(3, 14), (4, 15)] {
+            if st.dma1.irq(c) {
+                st.scs.set_pending(irq);
+            }
         }
     }
 
