@@ -37,6 +37,9 @@ pub struct Bus {
     pub on_wire: Option<Transfer>,
     /// Frames delivered: (sender, frame, SOF bit).
     pub log: Vec<(usize, RawFrame, u64)>,
+    /// Per `log` entry: when the sender's code requested it (TXRQ, ps) and, for a frame
+    /// the slot-timer interrupt committed, the slot boundary (TIM2 match, ps).
+    pub meta: Vec<(u64, Option<u64>)>,
     pub bit_ps: u64,
     /// Bit time until which the bus is busy (end of the last frame).
     idle_from: u64,
@@ -48,6 +51,7 @@ impl Bus {
             mcus,
             on_wire: None,
             log: Vec::new(),
+            meta: Vec::new(),
             bit_ps,
             idle_from: 0,
         }
@@ -129,6 +133,14 @@ impl Bus {
                         }
                     }
                     self.log.push((t.node, t.frame, t.sof_bit));
+                    let meta = self.mcus.get(t.node).map_or((0, None), |m| {
+                        let p = &m.st.probe;
+                        (
+                            p.txrq_ps.get(t.mailbox).copied().unwrap_or(0),
+                            p.boundary_ps.get(t.mailbox).copied().flatten(),
+                        )
+                    });
+                    self.meta.push(meta);
                     self.idle_from = bit;
                 } else {
                     self.on_wire = Some(t);

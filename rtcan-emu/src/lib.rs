@@ -10,11 +10,13 @@ pub mod bxcan;
 pub mod elf;
 pub mod mcu;
 pub mod periph;
+pub mod probe;
 pub mod report;
 pub mod robot;
 pub mod rtt;
 pub mod scs;
 pub mod serial;
+pub mod sim_report;
 mod uc;
 
 /// Result of a register access: the value read, or the unknown offset.

@@ -3,8 +3,8 @@
 use crate::bxcan::BxCan;
 use crate::elf;
 use crate::periph::{Adc, Afio, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, APB1_CAN, PS};
-use crate::serial::{Dma, Usart, USART1_DR};
 use crate::scs::Scs;
+use crate::serial::{Dma, Usart, USART1_DR};
 use crate::uc::*;
 use crate::Access;
 use core::ffi::c_void;
@@ -77,6 +77,8 @@ pub struct State {
     pub stop_on_txrq: bool,
     /// All unknown accesses, repeats included.
     pub unknown_count: u64,
+    /// Slot timer → TXRQ latencies and TXRQ times (`probe`).
+    pub probe: crate::probe::SlotProbe,
     /// Exceptions taken, by exception number.
     pub taken: std::collections::BTreeMap<u16, u64>,
     /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
@@ -205,6 +207,9 @@ impl State {
                 let off = addr & 0x3FF;
                 if (0x180..0x1B0).contains(&off) && off.is_multiple_of(16) && v & 1 != 0 {
                     self.txrq_at.get_or_insert(now);
+                    let in_timer = self.scs.active.contains(&crate::probe::EXC_TIM2);
+                    self.probe
+                        .txrq(((off - 0x180) / 16) as usize, now, in_timer);
                 }
                 r
             }
@@ -467,6 +472,7 @@ impl Mcu {
             txrq_at: None,
             stop_on_txrq: false,
             unknown_count: 0,
+            probe: crate::probe::SlotProbe::default(),
             taken: Default::default(),
             asleep_ps: 0,
             exc_return: false,
@@ -727,6 +733,9 @@ impl Mcu {
         // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
         for (i, t) in st.tim.iter_mut().enumerate() {
             t.sync(now, clk);
+            if i == 0 {
+                st.probe.timer_line(t.irq(), now);
+            }
             if t.irq() {
                 st.scs.set_pending(28 + i);
             }
@@ -830,6 +839,9 @@ impl Mcu {
         let pad = if xpsr & (1 << 9) != 0 { 4 } else { 0 };
         self.set_reg(REG_SP, sp + 32 + pad);
         self.st.scs.deactivate();
+        if !self.st.scs.active.contains(&crate::probe::EXC_TIM2) {
+            self.st.probe.timer_isr_done();
+        }
         let ps = self.cycles_ps(self.st.timing.exception_cycles);
         self.st.add_time(ps);
         if self.st.scs.active.is_empty() && self.st.scs.sleep_on_exit() {

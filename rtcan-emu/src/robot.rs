@@ -179,7 +179,9 @@ impl EmuRobot {
     ) -> Result<EmuRobot, String> {
         let names: Vec<&str> = plan.modules.iter().map(|m| m.name.as_str()).collect();
         if names != MODULES || mcus.len() != MODULES.len() {
-            return Err(format!("expected the Triskar2 modules {MODULES:?}, got {names:?}"));
+            return Err(format!(
+                "expected the Triskar2 modules {MODULES:?}, got {names:?}"
+            ));
         }
         let world = World::new().with_wall((wall_x_m, -2.0), (wall_x_m, 2.0));
         let cat: &'static Catalog = Box::leak(Box::new(plan_catalog(plan)));
@@ -238,7 +240,10 @@ impl EmuRobot {
     fn tick(&mut self, t: Nanos) {
         // Motors: H-bridge duty from TIM4 (CH1 forward, CH2 reverse, io.rs).
         for (i, m) in self.bus.mcus.iter().skip(1).take(3).enumerate() {
-            let duty = m.st.tim.get(TIM4).map_or(0.0, |tim| tim.duty(0) - tim.duty(1));
+            let duty =
+                m.st.tim
+                    .get(TIM4)
+                    .map_or(0.0, |tim| tim.duty(0) - tim.duty(1));
             if let Some(d) = self.physics.duty.get_mut(i) {
                 *d = duty as f32;
             }
@@ -300,10 +305,10 @@ impl EmuRobot {
                 if let Some(n) =
                     triskar2_link::encode(triskar2_link::topic::TELEOP, &payload, &mut frame)
                 {
-                    let start = (self.next_cmd * PS_NS)
-                        .max(self.host_tx.back().map_or(0, |b| b.0));
+                    let start = (self.next_cmd * PS_NS).max(self.host_tx.back().map_or(0, |b| b.0));
                     for (k, b) in frame.iter().take(n).enumerate() {
-                        self.host_tx.push_back((start + (k as u64 + 1) * BYTE_PS, *b));
+                        self.host_tx
+                            .push_back((start + (k as u64 + 1) * BYTE_PS, *b));
                     }
                 }
             }
@@ -334,9 +339,11 @@ impl EmuRobot {
             let rx = &mut self.host_rx;
             match topic {
                 triskar2_link::topic::ODOMETRY if payload.len() == osize => {
-                    if let (Some(x), Some(y), Some(th)) =
-                        (f32_at(payload, ox), f32_at(payload, oy), f32_at(payload, oth))
-                    {
+                    if let (Some(x), Some(y), Some(th)) = (
+                        f32_at(payload, ox),
+                        f32_at(payload, oy),
+                        f32_at(payload, oth),
+                    ) {
                         rx.odometry.push((at / PS_NS, x, y, th));
                     }
                 }

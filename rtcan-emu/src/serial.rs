@@ -255,7 +255,12 @@ impl Dma {
 
     /// The channel's interrupt line (TCIE/HTIE with their flags, §13.3.7).
     pub fn irq(&self, c: usize) -> bool {
-        let ccr = self.ch.get(c).and_then(|ch| ch.first()).copied().unwrap_or(0);
+        let ccr = self
+            .ch
+            .get(c)
+            .and_then(|ch| ch.first())
+            .copied()
+            .unwrap_or(0);
         let flags = self.isr >> (4 * c as u32);
         (ccr & TCIE != 0 && flags & 2 != 0) || (ccr & HTIE != 0 && flags & 4 != 0)
     }

@@ -14,7 +14,8 @@ fn usart_115200() -> Usart {
     let mut u = Usart::default();
     // BRR 625 at 72 MHz = 115 200 Bd (§27.3.4); UE | TE | RE (§27.6.4).
     u.write(0x08, 625, 0, PCLK2).unwrap();
-    u.write(0x0C, (1 << 13) | (1 << 3) | (1 << 2), 0, PCLK2).unwrap();
+    u.write(0x0C, (1 << 13) | (1 << 3) | (1 << 2), 0, PCLK2)
+        .unwrap();
     u
 }
 
@@ -30,7 +31,11 @@ fn usart_tx_shift_register_and_tdr_27_3_2() {
     let sr = |u: &mut Usart, t| u.read(0, t, PCLK2).unwrap();
     assert_eq!(sr(&mut u, 0) & 0xC0, 0xC0, "idle: TXE and TC");
     u.write(0x04, 0x41, 0, PCLK2).unwrap();
-    assert_eq!(sr(&mut u, 0) & 0xC0, 0x80, "first byte in the shifter: TXE, not TC");
+    assert_eq!(
+        sr(&mut u, 0) & 0xC0,
+        0x80,
+        "first byte in the shifter: TXE, not TC"
+    );
     u.write(0x04, 0x42, 0, PCLK2).unwrap();
     assert_eq!(sr(&mut u, 10 * US) & 0x80, 0, "second byte waits in TDR");
     assert_eq!(sr(&mut u, byte) & 0xC0, 0x80, "first out: TDR empty again");
@@ -52,9 +57,14 @@ fn usart_rx_rxne_and_overrun_27_3_3() {
     u.rx_byte(8);
     assert_ne!(u.read(0, 0, PCLK2).unwrap() & (1 << 3), 0, "ORE");
     assert_eq!(u.read(4, 0, PCLK2).unwrap(), 7, "the first byte kept");
-    assert_eq!(u.read(0, 0, PCLK2).unwrap() & 0x28, 0, "RXNE and ORE cleared");
+    assert_eq!(
+        u.read(0, 0, PCLK2).unwrap() & 0x28,
+        0,
+        "RXNE and ORE cleared"
+    );
     // RXNEIE (bit 5) raises the line while RXNE.
-    u.write(0x0C, (1 << 13) | (1 << 2) | (1 << 5), 0, PCLK2).unwrap();
+    u.write(0x0C, (1 << 13) | (1 << 2) | (1 << 5), 0, PCLK2)
+        .unwrap();
     assert!(!u.irq(0, PCLK2));
     u.rx_byte(9);
     assert!(u.irq(0, PCLK2));
@@ -78,20 +88,33 @@ fn dma_ch5(ndtr: u32, circ: bool) -> Dma {
 #[test]
 fn dma_circular_peripheral_to_memory_13_3_6() {
     let mut d = dma_ch5(4, true);
-    let addrs: Vec<u32> = (0..6)
-        .map(|_| d.request(4, USART1_DR).unwrap())
-        .collect();
+    let addrs: Vec<u32> = (0..6).map(|_| d.request(4, USART1_DR).unwrap()).collect();
     assert_eq!(
         addrs,
-        [0x2000_0100, 0x2000_0101, 0x2000_0102, 0x2000_0103, 0x2000_0100, 0x2000_0101]
+        [
+            0x2000_0100,
+            0x2000_0101,
+            0x2000_0102,
+            0x2000_0103,
+            0x2000_0100,
+            0x2000_0101
+        ]
     );
-    assert_eq!(d.read(0x08 + 20 * 4 + 4).unwrap(), 2, "NDTR after 6 of 4 (reloaded)");
+    assert_eq!(
+        d.read(0x08 + 20 * 4 + 4).unwrap(),
+        2,
+        "NDTR after 6 of 4 (reloaded)"
+    );
     assert_eq!((d.isr >> 16) & 0xF, 0b0111, "GIF, TCIF, HTIF of channel 5");
     assert!(d.irq(4), "TCIE");
     d.write(0x04, 1 << 16).unwrap();
     assert_eq!(d.isr, 0, "CGIF5 clears the channel's flags");
     d.write(0x08 + 20 * 4 + 4, 100).unwrap();
-    assert_eq!(d.read(0x08 + 20 * 4 + 4).unwrap(), 2, "CNDTR protected while EN");
+    assert_eq!(
+        d.read(0x08 + 20 * 4 + 4).unwrap(),
+        2,
+        "CNDTR protected while EN"
+    );
     // Another peripheral, or the other direction, is not served.
     assert_eq!(d.request(4, 0x4000_4404), None);
     assert_eq!(d.request(3, USART1_DR), None);

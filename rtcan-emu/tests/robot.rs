@@ -60,7 +60,18 @@ fn emulated_robot_drives_to_the_wall_and_stops_short() {
             s.wheels
         );
     }
-    eprintln!("overrides {} host {:?}", r.overrides, (r.host_rx.proximity, r.host_rx.battery, r.host_rx.log, &r.host_rx.last_log, r.host_rx.odometry.len(), r.host_rx.bad));
+    eprintln!(
+        "overrides {} host {:?}",
+        r.overrides,
+        (
+            r.host_rx.proximity,
+            r.host_rx.battery,
+            r.host_rx.log,
+            &r.host_rx.last_log,
+            r.host_rx.odometry.len(),
+            r.host_rx.bad
+        )
+    );
     for m in &r.bus.mcus {
         assert_eq!(m.st.unknown, vec![], "{}", m.name);
         assert_eq!(m.st.fault, None, "{}", m.name);
