@@ -7,6 +7,7 @@
 //! `rtcan` library depends on this crate.
 pub mod bus;
 pub mod bxcan;
+pub mod compare;
 pub mod elf;
 pub mod mcu;
 pub mod periph;

@@ -149,6 +149,8 @@ pub struct EmuRobot {
     /// Velocity messages that differ from the last teleop on the bus: limited by
     /// obstacle_avoid (the app counts its overrides; this is that count seen from the wire).
     pub overrides: u32,
+    /// Teleop messages on the bus: (SOF of the first fragment, ns; vx).
+    pub teleop: Vec<(Nanos, f32)>,
     /// Host bytes on their way to the gateway: (ps their stop bit ends, byte).
     host_tx: VecDeque<(u64, u8)>,
     next_cmd: Nanos,
@@ -208,6 +210,7 @@ impl EmuRobot {
             script,
             host_rx: HostRx::default(),
             overrides: 0,
+            teleop: Vec::new(),
             host_tx: VecDeque::new(),
             next_cmd: 0,
             link: triskar2_link::Decoder::new(),
@@ -285,7 +288,6 @@ impl EmuRobot {
     /// The host's commands: a `triskar2_link` teleop frame every `period_ns`, bytes at
     /// 115 200 Bd; delivered to the gateway's USART once their stop bit is in.
     fn host_send(&mut self, t: Nanos) {
-        const BYTE_PS: u64 = 10 * 1_000_000_000_000 / 115_200;
         while self.next_cmd <= t {
             let vx = self.script.vx_at(self.next_cmd);
             self.physics.cmd = Some(Twist {
@@ -293,25 +295,8 @@ impl EmuRobot {
                 vy: 0.0,
                 wz: 0.0,
             });
-            if let Some((ox, oy, oz)) = self.layout.teleop {
-                let size = topic_of(self.cat, "teleop").map_or(0, |(_, t)| usize::from(t.size));
-                let mut payload = vec![0u8; size];
-                for (off, x) in [(ox, vx), (oy, 0.0), (oz, 0.0)] {
-                    if let Some(b) = payload.get_mut(off..off + 4) {
-                        b.copy_from_slice(&x.to_le_bytes());
-                    }
-                }
-                let mut frame = [0u8; triskar2_link::MAX_PAYLOAD + triskar2_link::OVERHEAD];
-                if let Some(n) =
-                    triskar2_link::encode(triskar2_link::topic::TELEOP, &payload, &mut frame)
-                {
-                    let start = (self.next_cmd * PS_NS).max(self.host_tx.back().map_or(0, |b| b.0));
-                    for (k, b) in frame.iter().take(n).enumerate() {
-                        self.host_tx
-                            .push_back((start + (k as u64 + 1) * BYTE_PS, *b));
-                    }
-                }
-            }
+            let frame = self.teleop_frame(vx);
+            self.host_bytes(self.next_cmd, &frame);
             self.next_cmd += self.script.period_ns.max(1);
         }
         while let Some(&(at, b)) = self.host_tx.front() {
@@ -322,6 +307,35 @@ impl EmuRobot {
             if let Some(g) = self.bus.mcus.get_mut(GATEWAY) {
                 g.usart_receive(b);
             }
+        }
+    }
+
+    /// The host link frame of a teleop command `vx` (m/s, vy = wz = 0): `triskar2_link`
+    /// framing of the teleop payload laid out as robot.toml's `Twist`.
+    pub fn teleop_frame(&self, vx: f32) -> Vec<u8> {
+        let Some((ox, oy, oz)) = self.layout.teleop else {
+            return Vec::new();
+        };
+        let size = topic_of(self.cat, "teleop").map_or(0, |(_, t)| usize::from(t.size));
+        let mut payload = vec![0u8; size];
+        for (off, x) in [(ox, vx), (oy, 0.0), (oz, 0.0)] {
+            if let Some(b) = payload.get_mut(off..off + 4) {
+                b.copy_from_slice(&x.to_le_bytes());
+            }
+        }
+        let mut frame = [0u8; triskar2_link::MAX_PAYLOAD + triskar2_link::OVERHEAD];
+        let n =
+            triskar2_link::encode(triskar2_link::topic::TELEOP, &payload, &mut frame).unwrap_or(0);
+        frame.get(..n).unwrap_or(&[]).to_vec()
+    }
+
+    /// The host sends `bytes` from `at_ns` at 115 200 Bd (after what it already sends).
+    pub fn host_bytes(&mut self, at_ns: Nanos, bytes: &[u8]) {
+        const BYTE_PS: u64 = 10 * 1_000_000_000_000 / 115_200;
+        let start = (at_ns * PS_NS).max(self.host_tx.back().map_or(0, |b| b.0));
+        for (k, b) in bytes.iter().enumerate() {
+            self.host_tx
+                .push_back((start + (k as u64 + 1) * BYTE_PS, *b));
         }
     }
 
@@ -379,11 +393,20 @@ impl EmuRobot {
                 frame,
                 standard: false,
             };
-            let Some(Decoded::Message { topic, payload, .. }) = self.decoder.push(&e) else {
+            let Some(Decoded::Message {
+                topic,
+                payload,
+                time_ns,
+                ..
+            }) = self.decoder.push(&e)
+            else {
                 continue;
             };
             if Some(topic) == teleop {
                 self.last_teleop_vx = f32_at(&payload, tvx);
+                if let Some(vx) = self.last_teleop_vx {
+                    self.teleop.push((time_ns, vx));
+                }
             } else if topic == vel_topic {
                 let vx = f32_at(&payload, vel_vx).unwrap_or(0.0);
                 self.physics.velocity = Some(Twist {
