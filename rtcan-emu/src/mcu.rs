@@ -351,6 +351,16 @@ extern "C" fn on_spin(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void
     }
 }
 
+/// An instruction that may unmask a pending interrupt: end the run right after it, so the
+/// interrupt is taken there (as the NVIC would) rather than at the end of the run.
+extern "C" fn on_unmask(_uc: *mut uc_engine, _addr: u64, _size: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    // +2: whichever of this hook and `on_code` runs first for this instruction, the run
+    // stops before the instruction after it (at most one instruction late).
+    st.budget = st.budget.min(st.instructions + 2);
+}
+
 extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
@@ -559,10 +569,19 @@ impl Mcu {
         }
         // WFI sites (0xBF30 at half-word boundaries of the code): a hook each, to sleep.
         for seg in &image {
-            for (i, hw) in seg.bytes.chunks_exact(2).enumerate() {
-                let hook: *mut c_void = match hw {
-                    [0x30, 0xBF] => on_wfi as *mut c_void,
-                    [0xFE, 0xE7] => on_spin as *mut c_void,
+            let halves: Vec<&[u8]> = seg.bytes.chunks_exact(2).collect();
+            for (i, hw) in halves.iter().enumerate() {
+                let next = halves.get(i + 1).copied().unwrap_or(&[]);
+                let hook: *mut c_void = match (*hw, next) {
+                    ([0x30, 0xBF], _) => on_wfi as *mut c_void,
+                    ([0xFE, 0xE7], _) => on_spin as *mut c_void,
+                    // Instructions that can unmask a pending interrupt: CPSIE i (0xB662),
+                    // MSR PRIMASK / BASEPRI, Rn (0xF38n 0x8810 / 0x8811; ARMv7-M A7.7.83,
+                    // B5.2.3): RTIC's lock release and critical-section exit.
+                    ([0x62, 0xB6], _) => on_unmask as *mut c_void,
+                    ([n, 0xF3], [0x10 | 0x11, 0x88]) if n & 0xF0 == 0x80 => {
+                        on_unmask as *mut c_void
+                    }
                     _ => continue,
                 };
                 let a = u64::from(seg.addr) + 2 * i as u64;
@@ -729,12 +748,19 @@ impl Mcu {
     fn raise_irqs(&mut self) {
         let now = self.st.now();
         let clk = self.st.rcc.tim2clk();
-        let st = &mut self.st;
         // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
+        let core = (
+            self.reg(REG_PC),
+            self.reg(REG_PRIMASK) & 1 != 0,
+            self.reg(REG_BASEPRI) as u8,
+        );
+        let st = &mut self.st;
         for (i, t) in st.tim.iter_mut().enumerate() {
             t.sync(now, clk);
             if i == 0 {
                 st.probe.timer_line(t.irq(), now);
+                let active = st.scs.active.last().copied().unwrap_or(0);
+                st.probe.core_at_rise(core.0, core.1, core.2, active);
             }
             if t.irq() {
                 st.scs.set_pending(28 + i);

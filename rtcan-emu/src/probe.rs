@@ -17,6 +17,11 @@ pub struct SlotProbe {
     line: bool,
     /// Time (ps) the line rose, while no TXRQ answered it yet.
     open: Option<u64>,
+    /// What the core was doing when the line rose: (PC, PRIMASK, BASEPRI, active
+    /// exception), for the worst sample (`worst`).
+    at_rise: Option<(u32, bool, u8, u16)>,
+    /// The worst sample's latency (ns) and `at_rise`: what delayed the slot timer most.
+    pub worst: Option<(u64, (u32, bool, u8, u16))>,
     hist: Vec<u32>,
     pub samples: u64,
     sum_ns: f64,
@@ -33,6 +38,8 @@ impl Default for SlotProbe {
         SlotProbe {
             line: false,
             open: None,
+            at_rise: None,
+            worst: None,
             hist: vec![0; BINS],
             samples: 0,
             sum_ns: 0.0,
@@ -48,6 +55,7 @@ impl SlotProbe {
     pub fn timer_line(&mut self, high: bool, now: u64) {
         if high && !self.line {
             self.open = Some(now);
+            self.at_rise = None;
         }
         self.line = high;
     }
@@ -69,11 +77,21 @@ impl SlotProbe {
             let ns = now.saturating_sub(open) / 1_000;
             self.samples += 1;
             self.sum_ns += ns as f64;
+            if ns > self.max_ns || self.worst.is_none() {
+                self.worst = self.at_rise.map(|c| (ns, c));
+            }
             self.max_ns = self.max_ns.max(ns);
             let bin = ((ns / BIN_NS) as usize).min(BINS - 1);
             if let Some(b) = self.hist.get_mut(bin) {
                 *b += 1;
             }
+        }
+    }
+
+    /// The core's state when the line rose (call right after a rising `timer_line`).
+    pub fn core_at_rise(&mut self, pc: u32, primask: bool, basepri: u8, active: u16) {
+        if self.open.is_some() && self.at_rise.is_none() {
+            self.at_rise = Some((pc, primask, basepri, active));
         }
     }
 

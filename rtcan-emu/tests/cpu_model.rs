@@ -40,7 +40,11 @@ fn model(cost: Cost) -> rtcan_sim::triskar::TriskarRun {
         sim: SimConfig {
             seconds: SECONDS,
             seed: 1,
-            cpu: Some(CpuModel::new(Design::Prioritised, CPI).unwrap().with_cost(cost)),
+            cpu: Some(
+                CpuModel::new(Design::Prioritised, CPI)
+                    .unwrap()
+                    .with_cost(cost),
+            ),
             ..SimConfig::default()
         },
         ..TriskarConfig::default()
@@ -72,6 +76,14 @@ fn slot_latency_and_jitter_agree_with_the_cpu_model() {
     let (mean, max) = (model(Cost::Mean), model(Cost::Max));
     let rows = rows(&emu, &mean, &max);
     eprintln!("{}", text(&rows, CPI));
+    for m in &robot.bus.mcus {
+        if let Some((ns, (pc, primask, basepri, exc))) = m.st.probe.worst {
+            eprintln!(
+                "{}: worst slot->TXRQ {ns} ns; at the timer match pc {pc:#010x} PRIMASK {primask} BASEPRI {basepri:#x} exception {exc}",
+                m.name
+            );
+        }
+    }
     assert_eq!(rows.len(), 6);
     for r in &rows {
         if r.model_txrq_max_ns == 0 {
@@ -80,18 +92,20 @@ fn slot_latency_and_jitter_agree_with_the_cpu_model() {
             // heartbeat/battery frames: docs/EMULATOR.md.
             continue;
         }
-        // Slot latency: the emulated mean within ±25 % of the model's mean-cost mean,
-        // the emulated max at or below the model's max-cost bound + 25 %.
+        // Slot latency: the emulated mean within ±10 % of the model's mean-cost mean;
+        // the emulated max at most 1 µs over the model's max-cost bound (blocking the
+        // cost table does not have: interrupts disabled by rtcan-pubsub's
+        // `SystemStatus` critical sections, docs/EMULATOR.md).
         let m = r.model_txrq_mean_ns;
         assert!(
-            (r.emu_txrq_mean_ns - m).abs() <= 0.25 * m,
+            (r.emu_txrq_mean_ns - m).abs() <= 0.10 * m,
             "{}: mean {} vs model {}",
             r.module,
             r.emu_txrq_mean_ns,
             m
         );
         assert!(
-            r.emu_txrq_max_ns as f64 <= 1.25 * r.model_txrq_max_ns as f64,
+            r.emu_txrq_max_ns <= r.model_txrq_max_ns + 1_000,
             "{}: max {} vs model bound {}",
             r.module,
             r.emu_txrq_max_ns,
