@@ -156,7 +156,8 @@ mod tests {
         p.txrq(0, 7_500_000, true);
         assert_eq!((p.samples, p.max_ns), (2, 1_500));
         assert_eq!(p.mean_ns(), 1_000.0);
-        assert_eq!(p.quantile_ns(0.5), 500);
+        // Upper edge of the 10 ns bin, as rtcan-sim's CPU model reports it.
+        assert_eq!(p.quantile_ns(0.5), 510);
         assert_eq!(p.quantile_ns(0.99), 1_500);
     }
 }
