@@ -1,4 +1,4 @@
-//! `rtcan sim [robot.toml] --emulate [--seconds N] [--json] [--images DIR]`: runs the
+//! `rtcan sim [robot.toml] --emulate [--seconds N] [--seed N] [--cpi X] [--json] [--images DIR]`: runs the
 //! workspace robot's Triskar2 release images on emulated STM32F103s by starting the
 //! `rtcan-emu` program (docs/EMULATOR.md). A separate process on purpose: rtcan-emu links
 //! the GPL-2.0 Unicorn, which the `rtcan` command (MIT OR Apache-2.0) must not.
@@ -18,7 +18,7 @@ pub fn run(args: &[String]) -> i32 {
         match a.as_str() {
             "--emulate" => {}
             "--json" => forward.push(a.clone()),
-            "--seconds" | "--images" => {
+            "--seconds" | "--images" | "--seed" | "--cpi" => {
                 let Some(v) = it.next() else {
                     eprintln!("error: {a} needs a value");
                     return 2;
@@ -27,7 +27,7 @@ pub fn run(args: &[String]) -> i32 {
                 forward.push(v.clone());
             }
             s if s.starts_with('-') => {
-                eprintln!("error: `{s}` does not apply with --emulate (options: --seconds, --json, --images)");
+                eprintln!("error: `{s}` does not apply with --emulate (options: --seconds, --seed, --cpi, --json, --images)");
                 return 2;
             }
             robot => {

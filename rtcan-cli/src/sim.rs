@@ -15,7 +15,7 @@ const SYNOPSIS: &str =
                  [--master-dies-at S] [--fault MODULE:KIND[=D]@T]...
                  [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]
                  [--cpu-cost max|mean]
-       rtcan sim [robot.toml] --emulate [--seconds N] [--json] [--images DIR]
+       rtcan sim [robot.toml] --emulate [--seconds N] [--seed N] [--cpi X] [--json] [--images DIR]
        rtcan sim [robot.toml] --campaign [--seconds N] [--seed S] [--json]
        rtcan sim --help";
 

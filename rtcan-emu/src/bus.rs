@@ -21,6 +21,9 @@ pub fn frame_bits(f: &RawFrame) -> u64 {
     stuffable + (stuffable - 1) / 4 + 13
 }
 
+/// Intermission bits after EOF (included in `frame_bits`).
+const INTERMISSION: u64 = 3;
+
 /// A frame on the wire.
 #[derive(Clone, Debug)]
 pub struct Transfer {
@@ -28,8 +31,16 @@ pub struct Transfer {
     pub mailbox: usize,
     pub frame: RawFrame,
     pub sof_bit: u64,
+    /// The bit after the last EOF bit (the intermission follows).
     pub end_bit: u64,
+    /// The receivers have taken the frame (at the last-but-one EOF bit).
+    pub received: bool,
 }
+
+/// ISO 11898-1 §10.7: a frame is valid for its receivers at the last-but-one bit of EOF
+/// (when bxCAN raises the RX interrupt), for its transmitter at the end of EOF; the
+/// intermission (3 bits) follows before the next SOF.
+const RX_VALID_BEFORE_EOF_END: u64 = 1;
 
 /// Bus of several MCUs, all with the same bit time.
 pub struct Bus {
@@ -37,6 +48,9 @@ pub struct Bus {
     pub on_wire: Option<Transfer>,
     /// Frames delivered: (sender, frame, SOF bit).
     pub log: Vec<(usize, RawFrame, u64)>,
+    /// Per `log` entry: when the sender's code requested it (TXRQ, ps) and, for a frame
+    /// the slot-timer interrupt committed, the slot boundary (TIM2 match, ps).
+    pub meta: Vec<(u64, Option<u64>)>,
     pub bit_ps: u64,
     /// Bit time until which the bus is busy (end of the last frame).
     idle_from: u64,
@@ -48,6 +62,7 @@ impl Bus {
             mcus,
             on_wire: None,
             log: Vec::new(),
+            meta: Vec::new(),
             bit_ps,
             idle_from: 0,
         }
@@ -110,6 +125,7 @@ impl Bus {
             let idle = self.on_wire.is_none() && bit >= self.idle_from;
             let pending = self.mcus.iter().any(|m| m.st.can.tx_candidate().is_some());
             let step_to = match &self.on_wire {
+                Some(t) if !t.received => t.end_bit - RX_VALID_BEFORE_EOF_END,
                 Some(t) => t.end_bit,
                 None if idle && !pending => self.look_ahead(bit, end_bit)?,
                 None => bit + 1,
@@ -119,17 +135,29 @@ impl Bus {
                 m.run_until(step_to * self.bit_ps)?;
             }
             bit = step_to;
-            if let Some(t) = self.on_wire.take() {
-                if bit >= t.end_bit {
+            if let Some(mut t) = self.on_wire.take() {
+                if !t.received && bit + RX_VALID_BEFORE_EOF_END >= t.end_bit {
                     for (i, m) in self.mcus.iter_mut().enumerate() {
-                        if i == t.node {
-                            m.st.can.tx_finished(t.mailbox, true, bit);
-                        } else {
+                        if i != t.node {
                             m.st.can.receive(&t.frame, t.sof_bit);
                         }
                     }
+                    t.received = true;
+                }
+                if bit >= t.end_bit {
+                    if let Some(m) = self.mcus.get_mut(t.node) {
+                        m.st.can.tx_finished(t.mailbox, true, bit);
+                    }
                     self.log.push((t.node, t.frame, t.sof_bit));
-                    self.idle_from = bit;
+                    let meta = self.mcus.get(t.node).map_or((0, None), |m| {
+                        let p = &m.st.probe;
+                        (
+                            p.txrq_ps.get(t.mailbox).copied().unwrap_or(0),
+                            p.boundary_ps.get(t.mailbox).copied().flatten(),
+                        )
+                    });
+                    self.meta.push(meta);
+                    self.idle_from = bit + INTERMISSION;
                 } else {
                     self.on_wire = Some(t);
                 }
@@ -166,7 +194,8 @@ impl Bus {
                     mailbox: mb,
                     frame: f,
                     sof_bit: bit,
-                    end_bit: bit + len,
+                    end_bit: bit + len - INTERMISSION,
+                    received: false,
                 });
             }
         }

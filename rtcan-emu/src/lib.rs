@@ -7,12 +7,17 @@
 //! `rtcan` library depends on this crate.
 pub mod bus;
 pub mod bxcan;
+pub mod compare;
 pub mod elf;
 pub mod mcu;
 pub mod periph;
+pub mod probe;
 pub mod report;
+pub mod robot;
 pub mod rtt;
 pub mod scs;
+pub mod serial;
+pub mod sim_report;
 mod uc;
 
 /// Result of a register access: the value read, or the unknown offset.

@@ -1,17 +1,24 @@
-//! `rtcan-emu`: the Triskar2 release images on six emulated STM32F103 (docs/EMULATOR.md);
-//! `rtcan sim --emulate` runs this program (a separate process: the GPL-2.0 emulator is
-//! not linked into the `rtcan` command).
-use rtcan_emu::bus::Bus;
+//! `rtcan-emu`: the Triskar2 release images on six emulated STM32F103 with the
+//! simulator's plants (docs/EMULATOR.md); `rtcan sim --emulate` runs this program (a
+//! separate process: the GPL-2.0 emulator is not linked into the `rtcan` command).
+//! The report is the simulator's (`rtcan_sim::triskar::report`), plus what only the
+//! emulator knows (per module: instructions, unknown register accesses, defmt lines).
 use rtcan_emu::mcu::{Mcu, Timing};
+use rtcan_emu::robot::{EmuRobot, HostScript, MODULES};
+use rtcan_emu::sim_report::{triskar_run, RunInfo};
 use rtcan_emu::{report, rtt};
+use rtcan_sim::triskar::report::{triskar_json, triskar_text};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-const MODULES: [&str; 6] = ["gateway", "motor1", "motor2", "motor3", "proximity", "psu"];
-const USAGE: &str = "usage: rtcan-emu [--images DIR] [--seconds N] [--json]
+const USAGE: &str = "usage: rtcan-emu [--images DIR] [--robot FILE] [--seconds N] [--seed N] [--cpi X] [--json]
   --images DIR  the six Triskar2 ELF files (default examples/triskar2/target/thumbv7m-none-eabi/release)
-  --seconds N   emulated time, 0 < N <= 3600 (default 5)
-  --json        the report as JSON";
+  --robot FILE  the robot the images were built from (default robot.toml)
+  --seconds N   emulated time, 0 < N <= 3600 (default 10, as `rtcan sim` for triskar2)
+  --seed N      seed of the plant's sensor noise (default 1)
+  --cpi X       core cycles per instruction, wait states included, 0.5 <= X <= 10
+                (default: 1.0 + 0.25 per flash wait state = 1.5 at 72 MHz)
+  --json        the report as JSON (the fields of `rtcan sim --json`, plus `emulation`)";
 
 fn main() -> ExitCode {
     match run(std::env::args().skip(1).collect()) {
@@ -23,39 +30,76 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: Vec<String>) -> Result<(), (u8, String)> {
-    let mut dir = PathBuf::from("examples/triskar2/target/thumbv7m-none-eabi/release");
-    let (mut seconds, mut json) = (5.0f64, false);
+struct Args {
+    dir: PathBuf,
+    robot: PathBuf,
+    seconds: f64,
+    seed: u64,
+    timing: Timing,
+    json: bool,
+}
+
+fn parse(args: Vec<String>) -> Result<Option<Args>, (u8, String)> {
+    let mut a = Args {
+        dir: PathBuf::from("examples/triskar2/target/thumbv7m-none-eabi/release"),
+        robot: PathBuf::from("robot.toml"),
+        seconds: 10.0,
+        seed: 1,
+        timing: Timing::default(),
+        json: false,
+    };
     let mut it = args.into_iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--images" => {
-                dir = it
-                    .next()
-                    .map(PathBuf::from)
-                    .ok_or((2, "--images needs a value".into()))?
-            }
+    while let Some(arg) = it.next() {
+        let mut value = |name: &str| it.next().ok_or((2, format!("{name} needs a value")));
+        match arg.as_str() {
+            "--images" => a.dir = PathBuf::from(value("--images")?),
+            "--robot" => a.robot = PathBuf::from(value("--robot")?),
             "--seconds" => {
-                seconds = it
-                    .next()
-                    .and_then(|s| s.parse().ok())
-                    .ok_or((2, "bad --seconds".to_string()))?;
+                a.seconds = value("--seconds")?
+                    .parse()
+                    .map_err(|_| (2, "bad --seconds".to_string()))?
             }
-            "--json" => json = true,
+            "--seed" => {
+                a.seed = value("--seed")?
+                    .parse()
+                    .map_err(|_| (2, "bad --seed".to_string()))?
+            }
+            "--cpi" => {
+                let cpi: f64 = value("--cpi")?
+                    .parse()
+                    .map_err(|_| (2, "bad --cpi".to_string()))?;
+                if !(cpi.is_finite() && (0.5..=10.0).contains(&cpi)) {
+                    return Err((2, format!("--cpi must be in [0.5, 10], got {cpi}")));
+                }
+                a.timing = Timing {
+                    cpi,
+                    per_wait_state: 0.0,
+                    ..Timing::default()
+                };
+            }
+            "--json" => a.json = true,
             "-h" | "--help" => {
                 println!("{USAGE}");
-                return Ok(());
+                return Ok(None);
             }
             s => return Err((2, format!("unknown argument `{s}`\n{USAGE}"))),
         }
     }
-    if !(seconds > 0.0 && seconds <= 3600.0) {
+    if !(a.seconds > 0.0 && a.seconds <= 3600.0) {
         return Err((2, "--seconds must be in (0, 3600]".into()));
     }
+    Ok(Some(a))
+}
+
+fn run(args: Vec<String>) -> Result<(), (u8, String)> {
+    let Some(a) = parse(args)? else {
+        return Ok(());
+    };
+    let plan = rtcan_model::Robot::load(&a.robot).map_err(|d| (1, d.render()))?;
     let mut images = Vec::new();
     let mut mcus = Vec::new();
     for name in MODULES {
-        let p = dir.join(name);
+        let p = a.dir.join(name);
         let elf = std::fs::read(&p).map_err(|e| {
             (
                 1,
@@ -65,33 +109,45 @@ fn run(args: Vec<String>) -> Result<(), (u8, String)> {
                 ),
             )
         })?;
-        mcus.push(
-            Mcu::new(name, &elf, Timing::default()).map_err(|e| (1, format!("{name}: {e:?}")))?,
-        );
+        mcus.push(Mcu::new(name, &elf, a.timing).map_err(|e| (1, format!("{name}: {e:?}")))?);
         images.push(elf);
     }
-    let mut bus = Bus::new(mcus, 1_000_000);
+    let wall = 1.5;
+    let mut robot =
+        EmuRobot::new(&plan, mcus, wall, a.seed, HostScript::default()).map_err(|e| (1, e))?;
     let mut raw = vec![Vec::new(); MODULES.len()];
     let t0 = cpu_seconds();
-    let end_ms = (seconds * 1000.0) as u64;
-    for ms in (10..=end_ms.max(10)).step_by(10) {
-        bus.run_until(ms.min(end_ms) * 1_000_000_000)
-            .map_err(|e| (1, e))?;
-        for (i, m) in bus.mcus.iter_mut().enumerate() {
+    let end_ns = (a.seconds * 1e9) as u64;
+    let mut t = 0;
+    while t < end_ns {
+        t = (t + 10_000_000).min(end_ns);
+        robot.run_until(t).map_err(|e| (1, e))?;
+        for (i, m) in robot.bus.mcus.iter_mut().enumerate() {
             if let Some(r) = raw.get_mut(i) {
                 r.extend(rtt::drain(m));
             }
         }
     }
     let cpu = cpu_seconds() - t0;
+    let speed = if cpu > 0.0 { a.seconds / cpu } else { 0.0 };
     let logs: Vec<Vec<String>> = images
         .iter()
         .zip(&raw)
         .map(|(elf, bytes)| rtt::decode(elf, bytes).unwrap_or_else(|e| vec![format!("<{e}>")]))
         .collect();
-    let rep = report::json(&bus, seconds, cpu, &logs);
-    if json {
-        println!("{rep:#}");
+    let cpi = a.timing.cpi + 2.0 * a.timing.per_wait_state;
+    let info = RunInfo {
+        seconds: a.seconds,
+        seed: a.seed,
+        wall_x_m: wall,
+        cpi,
+    };
+    let emulation = report::json(&robot.bus, a.seconds, cpu, &logs);
+    let run = triskar_run(&mut robot, &plan, info, &logs).map_err(|e| (1, e))?;
+    if a.json {
+        let sim = triskar_json(&run, speed);
+        let body = sim.strip_suffix('}').unwrap_or(&sim);
+        println!("{body},\"emulation\":{emulation}}}");
         return Ok(());
     }
     for (name, lines) in MODULES.iter().zip(&logs) {
@@ -99,20 +155,13 @@ fn run(args: Vec<String>) -> Result<(), (u8, String)> {
             println!("[{name}] {l}");
         }
     }
+    println!();
+    print!("{}", triskar_text(&run));
     println!(
-        "{seconds} s emulated: {} frames, bus load {:.1} %, {:.2}x real time",
-        bus.log.len(),
-        100.0 * report::bus_load(&bus, (seconds * 1e6) as u64),
-        if cpu > 0.0 { seconds / cpu } else { 0.0 }
+        "\nemulated: {} s of six STM32F103 at CPI {cpi} in {cpu:.2} s CPU of one thread ({speed:.2}x real time)",
+        a.seconds
     );
-    for (id, (n, mean, jit)) in report::id_stats(&bus) {
-        if n > 1 && mean < 1_000_000.0 {
-            println!(
-                "  id {id:#010x}: {n:5} frames, period {mean:9.1} us, max deviation {jit:7.1} us"
-            );
-        }
-    }
-    for m in &bus.mcus {
+    for m in &robot.bus.mcus {
         for u in &m.st.unknown {
             println!(
                 "  {}: unknown register {:#010x} ({}) at pc {:#010x}",
@@ -126,7 +175,7 @@ fn run(args: Vec<String>) -> Result<(), (u8, String)> {
     Ok(())
 }
 
-/// CPU time of this process (Linux `/proc/self/schedstat`, ns).
+/// CPU time of this thread (Linux `/proc/thread-self/schedstat`, ns).
 fn cpu_seconds() -> f64 {
     std::fs::read_to_string("/proc/thread-self/schedstat")
         .ok()

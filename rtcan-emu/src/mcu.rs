@@ -2,8 +2,9 @@
 //! and `bxcan`, with time = instructions retired × cycles per instruction.
 use crate::bxcan::BxCan;
 use crate::elf;
-use crate::periph::{Adc, Afio, Dma, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, Usart, APB1_CAN, PS};
+use crate::periph::{Adc, Afio, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, APB1_CAN, PS};
 use crate::scs::Scs;
+use crate::serial::{Dma, Usart, USART1_DR};
 use crate::uc::*;
 use crate::Access;
 use core::ffi::c_void;
@@ -76,6 +77,8 @@ pub struct State {
     pub stop_on_txrq: bool,
     /// All unknown accesses, repeats included.
     pub unknown_count: u64,
+    /// Slot timer → TXRQ latencies and TXRQ times (`probe`).
+    pub probe: crate::probe::SlotProbe,
     /// Exceptions taken, by exception number.
     pub taken: std::collections::BTreeMap<u16, u64>,
     /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
@@ -156,8 +159,12 @@ impl State {
                 let port = ((addr - 0x4001_0800) / 0x400) as usize;
                 self.gpio.get(port).ok_or(addr)?.read(addr & 0x3FF)
             }
-            0x4001_3800..=0x4001_3BFF => self.usart1.read(addr & 0x3FF),
-            0x4002_0000..=0x4002_03FF => self.dma1.read(addr & 0x3FF),
+            // USART1 clocked by APB2ENR.USART1EN (bit 14), DMA1 by AHBENR.DMA1EN (bit 0).
+            0x4001_3800..=0x4001_3BFF if self.rcc.apb2enr & (1 << 14) != 0 => {
+                let pclk2 = self.rcc.pclk2();
+                self.usart1.read(addr & 0x3FF, now, pclk2)
+            }
+            0x4002_0000..=0x4002_03FF if self.rcc.ahbenr & 1 != 0 => self.dma1.read(addr & 0x3FF),
             0x4002_1000..=0x4002_13FF => self.rcc.read(addr & 0x3FF),
             0x4002_2000..=0x4002_23FF => self.flash.read(addr & 0x3FF),
             0xE000_1000..=0xE000_1FFF => self.scs.read_dwt(addr & 0xFFF, cyc),
@@ -200,6 +207,9 @@ impl State {
                 let off = addr & 0x3FF;
                 if (0x180..0x1B0).contains(&off) && off.is_multiple_of(16) && v & 1 != 0 {
                     self.txrq_at.get_or_insert(now);
+                    let in_timer = self.scs.active.contains(&crate::probe::EXC_TIM2);
+                    self.probe
+                        .txrq(((off - 0x180) / 16) as usize, now, in_timer);
                 }
                 r
             }
@@ -209,8 +219,13 @@ impl State {
                 let port = ((addr - 0x4001_0800) / 0x400) as usize;
                 self.gpio.get_mut(port).ok_or(addr)?.write(addr & 0x3FF, v)
             }
-            0x4001_3800..=0x4001_3BFF => self.usart1.write(addr & 0x3FF, v),
-            0x4002_0000..=0x4002_03FF => self.dma1.write(addr & 0x3FF, v),
+            0x4001_3800..=0x4001_3BFF if self.rcc.apb2enr & (1 << 14) != 0 => {
+                let pclk2 = self.rcc.pclk2();
+                self.usart1.write(addr & 0x3FF, v, now, pclk2)
+            }
+            0x4002_0000..=0x4002_03FF if self.rcc.ahbenr & 1 != 0 => {
+                self.dma1.write(addr & 0x3FF, v)
+            }
             0x4002_1000..=0x4002_13FF => {
                 let r = self.rcc.write(addr & 0x3FF, v);
                 self.retime();
@@ -336,6 +351,16 @@ extern "C" fn on_spin(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void
     }
 }
 
+/// An instruction that may unmask a pending interrupt: end the run right after it, so the
+/// interrupt is taken there (as the NVIC would) rather than at the end of the run.
+extern "C" fn on_unmask(_uc: *mut uc_engine, _addr: u64, _size: u32, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    // +2: whichever of this hook and `on_code` runs first for this instruction, the run
+    // stops before the instruction after it (at most one instruction late).
+    st.budget = st.budget.min(st.instructions + 2);
+}
+
 extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
@@ -457,6 +482,7 @@ impl Mcu {
             txrq_at: None,
             stop_on_txrq: false,
             unknown_count: 0,
+            probe: crate::probe::SlotProbe::default(),
             taken: Default::default(),
             asleep_ps: 0,
             exc_return: false,
@@ -543,10 +569,19 @@ impl Mcu {
         }
         // WFI sites (0xBF30 at half-word boundaries of the code): a hook each, to sleep.
         for seg in &image {
-            for (i, hw) in seg.bytes.chunks_exact(2).enumerate() {
-                let hook: *mut c_void = match hw {
-                    [0x30, 0xBF] => on_wfi as *mut c_void,
-                    [0xFE, 0xE7] => on_spin as *mut c_void,
+            let halves: Vec<&[u8]> = seg.bytes.chunks_exact(2).collect();
+            for (i, hw) in halves.iter().enumerate() {
+                let next = halves.get(i + 1).copied().unwrap_or(&[]);
+                let hook: *mut c_void = match (*hw, next) {
+                    ([0x30, 0xBF], _) => on_wfi as *mut c_void,
+                    ([0xFE, 0xE7], _) => on_spin as *mut c_void,
+                    // Instructions that can unmask a pending interrupt: CPSIE i (0xB662),
+                    // MSR PRIMASK / BASEPRI, Rn (0xF38n 0x8810 / 0x8811; ARMv7-M A7.7.83,
+                    // B5.2.3): RTIC's lock release and critical-section exit.
+                    ([0x62, 0xB6], _) => on_unmask as *mut c_void,
+                    ([n, 0xF3], [0x10 | 0x11, 0x88]) if n & 0xF0 == 0x80 => {
+                        on_unmask as *mut c_void
+                    }
                     _ => continue,
                 };
                 let a = u64::from(seg.addr) + 2 * i as u64;
@@ -613,6 +648,31 @@ impl Mcu {
     pub fn write_mem(&mut self, addr: u32, bytes: &[u8]) {
         // SAFETY: live engine, `bytes` readable for its length.
         unsafe { uc_mem_write(self.uc, u64::from(addr), bytes.as_ptr().cast(), bytes.len()) };
+    }
+
+    /// One byte arriving on USART1's RX pin (its stop bit ends now): with CR3.DMAR it
+    /// goes to DMA1 channel 5 and from there to memory (RM0008 §27.3.13, §13.3.7),
+    /// else into RDR. A receiver that is off (or not clocked) loses it.
+    pub fn usart_receive(&mut self, byte: u8) {
+        let st = &mut self.st;
+        if st.rcc.apb2enr & (1 << 14) == 0 || !st.usart1.receiving() {
+            st.usart1.rx_lost += 1;
+            return;
+        }
+        if st.usart1.rx_dma() {
+            // A DMA that is off or not clocked leaves the request pending: the byte sits
+            // in RDR (and the next one overruns), as on the chip.
+            let served = if st.rcc.ahbenr & 1 != 0 {
+                st.dma1.request(4, USART1_DR)
+            } else {
+                None
+            };
+            if let Some(addr) = served {
+                self.write_mem(addr, &[byte]);
+                return;
+            }
+        }
+        self.st.usart1.rx_byte(byte);
     }
 
     /// Power-on / system reset (ARMv7-M B1.5.5): peripherals to reset values, image in
@@ -688,10 +748,20 @@ impl Mcu {
     fn raise_irqs(&mut self) {
         let now = self.st.now();
         let clk = self.st.rcc.tim2clk();
-        let st = &mut self.st;
         // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
+        let core = (
+            self.reg(REG_PC),
+            self.reg(REG_PRIMASK) & 1 != 0,
+            self.reg(REG_BASEPRI) as u8,
+        );
+        let st = &mut self.st;
         for (i, t) in st.tim.iter_mut().enumerate() {
             t.sync(now, clk);
+            if i == 0 {
+                st.probe.timer_line(t.irq(), now);
+                let active = st.scs.active.last().copied().unwrap_or(0);
+                st.probe.core_at_rise(core.0, core.1, core.2, active);
+            }
             if t.irq() {
                 st.scs.set_pending(28 + i);
             }
@@ -720,8 +790,14 @@ impl Mcu {
                 st.scs.set_pending(6 + line);
             }
         }
-        if st.usart1.irq() {
+        // USART1: IRQ 37; DMA1 channels 4 and 5: IRQ 14 and 15 (table 63).
+        if st.usart1.irq(now, st.rcc.pclk2()) {
             st.scs.set_pending(37);
+        }
+        for (c, irq) in [(3, 14), (4, 15)] {
+            if st.dma1.irq(c) {
+                st.scs.set_pending(irq);
+            }
         }
     }
 
@@ -789,6 +865,9 @@ impl Mcu {
         let pad = if xpsr & (1 << 9) != 0 { 4 } else { 0 };
         self.set_reg(REG_SP, sp + 32 + pad);
         self.st.scs.deactivate();
+        if !self.st.scs.active.contains(&crate::probe::EXC_TIM2) {
+            self.st.probe.timer_isr_done();
+        }
         let ps = self.cycles_ps(self.st.timing.exception_cycles);
         self.st.add_time(ps);
         if self.st.scs.active.is_empty() && self.st.scs.sleep_on_exit() {

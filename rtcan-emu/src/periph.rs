@@ -94,6 +94,11 @@ impl Rcc {
         self.hclk() / Self::apb_div((self.cfgr >> 8) & 7)
     }
 
+    /// PCLK2 (PPRE2, §7.3.2): USART1's clock.
+    pub fn pclk2(&self) -> u64 {
+        self.hclk() / Self::apb_div((self.cfgr >> 11) & 7)
+    }
+
     /// TIM2 clock: PCLK1, ×2 when the APB1 prescaler is not 1 (§7.2).
     pub fn tim2clk(&self) -> u64 {
         let d = Self::apb_div((self.cfgr >> 8) & 7);
@@ -395,6 +400,26 @@ impl Tim2 {
         (self.ccr.get(ch).copied().unwrap_or(0), self.arr)
     }
 
+    /// Fraction of the period output `ch` (0..4) is high (§15.3.10, edge-aligned PWM,
+    /// up-counting): PWM mode 1 (OCxM = 110) high while CNT < CCRx, mode 2 (111) the
+    /// complement, with CCxE set and the counter enabled; 0 otherwise (output off,
+    /// frozen or forced modes). CCRx preload (OCxPE) is not modelled: a new compare
+    /// value counts at once instead of at the next update (at most one PWM period).
+    pub fn duty(&self, ch: usize) -> f64 {
+        let ccmr = self.ccmr.get(ch / 2).copied().unwrap_or(0) >> (8 * (ch % 2));
+        let mode = (ccmr >> 4) & 7;
+        if self.cr1 & 1 == 0 || self.ccer & (1 << (4 * ch)) == 0 || ccmr & 3 != 0 {
+            return 0.0;
+        }
+        let period = f64::from(self.arr) + 1.0;
+        let high = f64::from(self.ccr.get(ch).copied().unwrap_or(0)).min(period) / period;
+        match mode {
+            0b110 => high,
+            0b111 => 1.0 - high,
+            _ => 0.0,
+        }
+    }
+
     /// Brings the counter to time `now` with timer clock `clk_hz`, setting UIF/CCxIF for
     /// every update and compare match passed (§15.3.2, §15.3.9).
     pub fn sync(&mut self, now: u64, clk_hz: u64) {
@@ -598,108 +623,7 @@ impl Iwdg {
     }
 }
 
-/// USART1 (RM0008 §27.6): transmitted bytes are collected; received bytes are queued by
-/// the host side. Byte time is not modelled (TXE/TC stay set).
-#[derive(Clone, Debug, Default)]
-pub struct Usart {
-    pub cr1: u32,
-    cr2: u32,
-    pub cr3: u32,
-    brr: u32,
-    gtpr: u32,
-    pub tx: Vec<u8>,
-    pub rx: std::collections::VecDeque<u8>,
-    ore: bool,
-}
-
-impl Usart {
-    pub fn read(&mut self, off: u32) -> Access {
-        Ok(match off {
-            0x00 => {
-                0xC0 | (u32::from(!self.rx.is_empty()) << 5) | (u32::from(self.ore) << 3) | 0x10
-            }
-            0x04 => {
-                self.ore = false;
-                u32::from(self.rx.pop_front().unwrap_or(0))
-            }
-            0x08 => self.brr,
-            0x0C => self.cr1,
-            0x10 => self.cr2,
-            0x14 => self.cr3,
-            0x18 => self.gtpr,
-            _ => return Err(off),
-        })
-    }
-
-    pub fn write(&mut self, off: u32, v: u32) -> Access {
-        match off {
-            0x00 => {}
-            0x04 => self.tx.push(v as u8),
-            0x08 => self.brr = v & 0xFFFF,
-            0x0C => self.cr1 = v & 0x3FFF,
-            0x10 => self.cr2 = v & 0x7F7F,
-            0x14 => self.cr3 = v & 0x7FF,
-            0x18 => self.gtpr = v & 0xFFFF,
-            _ => return Err(off),
-        }
-        Ok(0)
-    }
-
-    /// The USART1 interrupt line (§27.4): TXEIE/TCIE with TXE/TC set, RXNEIE with data.
-    pub fn irq(&self) -> bool {
-        self.cr1 & (3 << 6) != 0 || self.cr1 & (1 << 5) != 0 && !self.rx.is_empty()
-    }
-}
-
-/// DMA1 (RM0008 §13.4): seven channels of CCR/CNDTR/CPAR/CMAR and the ISR flags.
-/// Transfers are done by the MCU (it owns memory): `Mcu::run_dma`.
-#[derive(Clone, Debug, Default)]
-pub struct Dma {
-    pub isr: u32,
-    pub ch: [[u32; 4]; 7],
-}
-
-impl Dma {
-    pub fn read(&self, off: u32) -> Access {
-        match off {
-            0x00 => Ok(self.isr),
-            0x04 => Ok(0),
-            0x08..=0x8F => {
-                let c = ((off - 0x08) / 20) as usize;
-                let r = (((off - 0x08) % 20) / 4) as usize;
-                self.ch.get(c).and_then(|ch| ch.get(r)).copied().ok_or(off)
-            }
-            _ => Err(off),
-        }
-    }
-
-    pub fn write(&mut self, off: u32, v: u32) -> Access {
-        match off {
-            0x04 => {
-                // IFCR: CGIFx clears all four flags of the channel.
-                let mut clear = v;
-                for c in 0..7 {
-                    if v & (1 << (4 * c)) != 0 {
-                        clear |= 0xF << (4 * c);
-                    }
-                }
-                self.isr &= !clear;
-            }
-            0x08..=0x8F => {
-                let c = ((off - 0x08) / 20) as usize;
-                let r = (((off - 0x08) % 20) / 4) as usize;
-                let x = self.ch.get_mut(c).and_then(|ch| ch.get_mut(r)).ok_or(off)?;
-                *x = match r {
-                    0 => v & 0x7FFF,
-                    1 => v & 0xFFFF,
-                    _ => v,
-                };
-            }
-            _ => return Err(off),
-        }
-        Ok(0)
-    }
-}
+// USART1 and DMA1: `serial.rs`.
 
 /// ADC1 (RM0008 §11, registers §11.12): single regular conversions started by SWSTART or
 /// by writing ADON again (§11.3.1); a conversion completes at once with the level the

@@ -21,13 +21,62 @@ fn emu(args: &[&str]) -> (i32, String, String) {
     )
 }
 
+/// `--json` is the simulator's triskar2 report (`rtcan sim --json`, docs/SIM.md) plus
+/// the emulator's own `emulation` member.
 #[test]
 fn json_report_of_a_short_run() {
-    let (code, out, err) = emu(&["--seconds", "0.2", "--json"]);
+    let (code, out, err) = emu(&["--seconds", "0.3", "--json"]);
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(v["seconds"], 0.2);
-    let modules = v["modules"].as_array().unwrap();
+    // The simulator's fields.
+    assert_eq!(v["scenario"], "triskar2");
+    assert_eq!(v["seconds"], 0.3);
+    assert_eq!(v["wall_x"], 1.5);
+    for key in [
+        "max_x",
+        "min_gap",
+        "final_gap",
+        "stopped_short",
+        "overrides",
+        "path",
+    ] {
+        assert!(!v["robot"][key].is_null(), "robot.{key}");
+    }
+    assert!(v["robot"]["path"].as_array().unwrap().len() >= 6);
+    let hrt = v["run"]["hrt"].as_array().unwrap();
+    let names: Vec<&str> = hrt.iter().map(|h| h["name"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        [
+            "encoder1@n1",
+            "wheel_setpoints@n1",
+            "odometry@n2",
+            "encoder3@n3",
+            "proximity@n4"
+        ]
+    );
+    // encoder1 at 200 Hz: 5 ms mean period, no miss.
+    assert!((hrt[0]["mean_period_us"].as_f64().unwrap() - 5000.0).abs() < 5.0);
+    assert_eq!(hrt[0]["misses"], 0);
+    let srt: Vec<&str> = v["run"]["srt"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["class"].as_str().unwrap())
+        .collect();
+    assert_eq!(srt, ["teleop", "velocity"]);
+    let load = &v["run"]["load"];
+    let total: f64 = ["sync", "hrt", "srt", "nrt"]
+        .iter()
+        .map(|k| load[k].as_f64().unwrap())
+        .sum();
+    assert!(total > 0.05 && total < 0.5, "bus load {total}");
+    assert_eq!(v["run"]["cpu"]["design"], "emulated");
+    assert_eq!(v["run"]["cpu"]["modules"].as_array().unwrap().len(), 6);
+    assert_eq!(v["modules"].as_array().unwrap().len(), 6);
+    assert!(v["speed_x_real_time"].as_f64().unwrap() > 0.0);
+    // The emulator's own.
+    let modules = v["emulation"]["modules"].as_array().unwrap();
     assert_eq!(modules.len(), 6);
     for m in modules {
         let name = m["module"].as_str().unwrap();
@@ -44,16 +93,6 @@ fn json_report_of_a_short_run() {
         );
         assert!(m["frames_sent"].as_u64().unwrap() > 0, "{name}");
     }
-    let load = v["bus_load"].as_f64().unwrap();
-    assert!(load > 0.05 && load < 0.5, "bus load {load}");
-    // encoder1 at 200 Hz: 5 ms mean period.
-    let enc = v["ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["id"] == "0xa200")
-        .unwrap();
-    assert!((enc["mean_period_us"].as_f64().unwrap() - 5000.0).abs() < 5.0);
 }
 
 #[test]
@@ -61,6 +100,14 @@ fn bad_arguments() {
     let (code, _, err) = emu(&["--seconds", "0"]);
     assert_eq!(code, 2);
     assert!(err.contains("--seconds must be in (0, 3600]"), "{err}");
+    let (code, _, err) = emu(&["--cpi", "0.1"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--cpi must be in [0.5, 10]"), "{err}");
+    let (code, _, err) = emu(&["--seed"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--seed needs a value"), "{err}");
+    let (code, _, err) = emu(&["--robot", "/nonexistent.toml"]);
+    assert_eq!(code, 1, "{err}");
     let (code, _, err) = emu(&["--frobnicate"]);
     assert_eq!(code, 2, "{err}");
     let (code, _, err) = emu(&["--images", "/nonexistent-dir"]);

@@ -1,0 +1,202 @@
+//! The emulated robot with the simulator's plants: the six release images drive
+//! Triskar2 toward a wall and the obstacle node stops it short, as the simulator's
+//! `rtcan-sim/tests/triskar2.rs` asserts; the gateway's host link (USART1 + DMA1) in
+//! both directions.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+use rtcan_emu::mcu::{Mcu, Timing};
+use rtcan_emu::robot::{EmuRobot, HostScript, MODULES};
+use rtcan_emu::sim_report::{triskar_run, RunInfo};
+use std::path::PathBuf;
+
+fn image(name: &str) -> Vec<u8> {
+    let dir = std::env::var_os("RTCAN_EMU_IMAGES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../examples/triskar2/target/thumbv7m-none-eabi/release")
+        });
+    let p = dir.join(name);
+    std::fs::read(&p).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (build the images first: cd examples/triskar2 && cargo build --release)",
+            p.display()
+        )
+    })
+}
+
+fn plan() -> rtcan_model::Plan {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robot.toml");
+    rtcan_model::Robot::load(&path).unwrap_or_else(|d| panic!("{}", d.render()))
+}
+
+fn robot(script: HostScript) -> EmuRobot {
+    let mcus = MODULES
+        .iter()
+        .map(|n| Mcu::new(n, &image(n), Timing::default()).unwrap())
+        .collect();
+    EmuRobot::new(&plan(), mcus, 1.5, 1, script).unwrap()
+}
+
+const MS: u64 = 1_000_000;
+
+fn no_faults(r: &EmuRobot) {
+    for m in &r.bus.mcus {
+        assert_eq!(
+            m.st.unknown,
+            vec![],
+            "{}: unknown register accesses",
+            m.name
+        );
+        assert_eq!(m.st.fault, None, "{}", m.name);
+    }
+}
+
+/// The simulator's assertions (rtcan-sim/tests/triskar2.rs,
+/// `robot_drives_to_the_wall_and_the_obstacle_node_stops_it_short`) on the emulated
+/// run, through the same report type. Differences in the bounds: none for the robot;
+/// HRT misses counted after the first second (proximity's start-up, docs/EMULATOR.md);
+/// SRT counts from the bus (`sim_report`).
+#[test]
+fn emulated_robot_drives_to_the_wall_and_stops_short() {
+    let mut robot = robot(HostScript::default());
+    let mut raw = vec![Vec::new(); 6];
+    for ms in (100..=10_000).step_by(100) {
+        robot.run_until(ms * MS).unwrap();
+        for (i, m) in robot.bus.mcus.iter_mut().enumerate() {
+            raw[i].extend(rtcan_emu::rtt::drain(m));
+        }
+    }
+    no_faults(&robot);
+    let logs: Vec<Vec<String>> = MODULES
+        .iter()
+        .zip(&raw)
+        .map(|(n, b)| rtcan_emu::rtt::decode(&image(n), b).unwrap())
+        .collect();
+    let info = RunInfo {
+        seconds: 10.0,
+        seed: 1,
+        wall_x_m: 1.5,
+        cpi: 1.5,
+    };
+    let r = triskar_run(&mut robot, &plan(), info, &logs).unwrap();
+    eprintln!("{}", rtcan_sim::triskar::report::triskar_text(&r));
+    // It moved: the host's command reached the wheels through the gateway's USART and
+    // DMA, gateway → proximity → motor1 → motors, and went well over halfway to the wall.
+    assert!(r.max_x_m > 0.6, "max x {}", r.max_x_m);
+    assert!(r.overrides > 10, "overrides {}", r.overrides);
+    assert!(
+        r.min_gap_m > 0.1 && r.min_gap_m < 0.5,
+        "min gap {}",
+        r.min_gap_m
+    );
+    assert!(r.stopped_short());
+    let at_7s = r.path.iter().find(|s| s.t_ns >= 7_000_000_000).unwrap();
+    assert!(at_7s.cmd_vx > 0.29, "command still forward");
+    assert!(at_7s.vx.abs() < 0.01, "but the robot stands: {}", at_7s.vx);
+    assert!(at_7s.velocity_vx.abs() < 0.01);
+    for h in &r.run.figures.hrt {
+        assert!(h.count > 0, "{}", h.name);
+    }
+    for m in &r.modules {
+        assert!(m.synced, "{} synced", m.name);
+        assert_eq!(m.safe_trips, 0, "{} tripped", m.name);
+    }
+    // The motor modules cleared their safe state and are driving/holding normally.
+    for m in r.modules.iter().filter(|m| m.name.starts_with("motor")) {
+        assert!(!m.safe_now, "{}", m.name);
+    }
+    for c in &r.run.figures.srt {
+        assert!(c.count > 50, "{}: {}", c.name, c.count);
+        assert_eq!(c.misses, 0, "{}", c.name);
+    }
+    // The odometry the gateway wrote to its USART tracks the true path.
+    let (t, x, _, _) = *r.odometry.last().unwrap();
+    let truth = r.path.iter().rev().find(|s| s.t_ns <= t).unwrap();
+    assert!(
+        (f64::from(x) - truth.pose.x).abs() < 0.05,
+        "{x} vs {}",
+        truth.pose.x
+    );
+    assert!(
+        r.gateway_rx.1 >= 8 && r.gateway_rx.2 >= 16,
+        "{:?}",
+        r.gateway_rx
+    );
+    // The JSON is the simulator's, field for field.
+    let v: serde_json::Value =
+        serde_json::from_str(&rtcan_sim::triskar::report::triskar_json(&r, 0.2)).unwrap();
+    assert_eq!(v["scenario"], "triskar2");
+    assert_eq!(v["robot"]["stopped_short"], true);
+    assert!(v["run"]["hrt"].as_array().unwrap().len() == 5);
+    assert_eq!(v["run"]["cpu"]["design"], "emulated");
+}
+
+/// Issue 12 item 4: the gateway's host link. Teleop frames (COBS + CRC-16,
+/// `triskar2_link`) go into USART1's RX pin; DMA1 channel 5 moves them into the image's
+/// ring; the gateway publishes `teleop` on the bus with the command's velocity. A frame
+/// with a bad CRC changes nothing. Odometry frames come out of USART1 TX.
+#[test]
+fn host_link_teleop_in_odometry_out() {
+    let script = HostScript {
+        vx: 0.25,
+        from_ns: 300 * MS,
+        until_ns: 10_000 * MS,
+        period_ns: 50 * MS,
+    };
+    let mut r = robot(script);
+    r.run_until(100 * MS).unwrap();
+    // A command of 0.9 m/s with its CRC broken: the link decoder must drop it.
+    let mut bad = r.teleop_frame(0.9);
+    let n = bad.len();
+    bad[n - 2] ^= 0x55;
+    r.host_bytes(120 * MS, &bad);
+    r.run_until(1_200 * MS).unwrap();
+    no_faults(&r);
+    let g = &r.bus.mcus[0];
+    assert_eq!(g.st.usart1.rx_lost, 0);
+    assert!(
+        r.teleop.iter().all(|&(_, vx)| vx != 0.9),
+        "bad CRC accepted"
+    );
+    // Before the command: zero; from one forwarding period after it: 0.25.
+    let before: Vec<f32> = r
+        .teleop
+        .iter()
+        .filter(|t| t.0 < 300 * MS)
+        .map(|t| t.1)
+        .collect();
+    let after: Vec<f32> = r
+        .teleop
+        .iter()
+        .filter(|t| t.0 > 360 * MS)
+        .map(|t| t.1)
+        .collect();
+    assert!(
+        before.len() >= 3 && before.iter().all(|&v| v == 0.0),
+        "{before:?}"
+    );
+    assert!(
+        after.len() >= 15 && after.iter().all(|&v| v == 0.25),
+        "{after:?}"
+    );
+    let first = r.teleop.iter().find(|t| t.1 == 0.25).unwrap().0;
+    assert!(
+        (300 * MS..360 * MS).contains(&first),
+        "first 0.25 at {first}"
+    );
+    // The robot answers: the wheels turn, odometry read from USART1 TX moves forward.
+    assert!(r.physics.max_x_m > 0.1, "{}", r.physics.max_x_m);
+    let odo = &r.host_rx.odometry;
+    assert!(odo.len() >= 50, "odometry frames {}", odo.len());
+    assert_eq!(r.host_rx.bad, 0);
+    let last = odo.last().unwrap();
+    assert!(
+        last.1 > 0.1 && (f64::from(last.1) - r.physics.base.pose().x).abs() < 0.05,
+        "{last:?}"
+    );
+}
