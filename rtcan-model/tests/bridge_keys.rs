@@ -177,7 +177,11 @@ fn bad_values_are_rustc_style_errors_with_a_hint() {
         };
         let out = errors(&src);
         for w in want {
-            let w = if *w == "--> robot.toml:NAME:8" { name_at.as_str() } else { w };
+            let w = if *w == "--> robot.toml:NAME:8" {
+                name_at.as_str()
+            } else {
+                w
+            };
             assert!(out.contains(w), "want `{w}` in\n{out}");
         }
     }
