@@ -123,7 +123,7 @@ impl SlotClock {
             self.lock(sof, counter);
             return true;
         }
-        let d_local = nanos_i64(sof) - nanos_i64(self.anchor_local);
+        let d_local = nanos_diff(sof, self.anchor_local);
         // The common case first: the next sync, one cycle after the last, within the
         // plausibility bound. The general path below finds the same: its estimate of the
         // elapsed cycles (rate within 1 %) rounds to 1, the counter difference is 1, and
@@ -138,7 +138,7 @@ impl SlotClock {
         if counter == next && d_local > 0 {
             let err = d_local - nanos_i64(cyc_u);
             if err.unsigned_abs() <= self.err_max {
-                return self.accept(sof, counter, 1, err, nanos_i64(cyc_u));
+                return self.accept_next(sof, counter, err);
             }
         }
         self.on_sync_general(sof, counter, d_local)
@@ -184,6 +184,43 @@ impl SlotClock {
             return true;
         }
         self.accept(sof, counter, d_cycles, err, d_bus)
+    }
+
+    /// `accept(sof, counter, 1, err, cycle_ns)` for the next sync (`|err| <= err_max`),
+    /// in 32-bit pieces: the rate from the reciprocal without the general `measure`'s
+    /// range checks, the anchor moved by one cycle. Same result (the test
+    /// `next_sync_fast_path_matches_the_general_path` compares them field by field).
+    fn accept_next(&mut self, sof: Nanos, counter: u32, err: i64) -> bool {
+        if self.recip_hi == 0 {
+            // Cycles of 256 ns or less, or of 2^32 ns and more: the exact division.
+            return self.accept(sof, counter, 1, err, nanos_i64(self.cycle_ns));
+        }
+        // recip_hi != 0 means 256 < cycle_ns < 2^32, so |err| <= err_max = cycle_ns / 100
+        // < 2^26: `e` is exact in 32 bits (and below 2^31, the bound `measure` checks), and
+        // e · recip_hi, e · recip_lo are 32 × 32 → 64 multiplies (both factors < 2^32).
+        let e = err.unsigned_abs() as u32;
+        let (hi, lo) = (self.recip_hi as u32, self.recip_lo as u32);
+        let per_cycle =
+            u64::from(e) * u64::from(hi) + ((u64::from(e) * u64::from(lo) + (1 << 31)) >> 32);
+        // per_cycle <= (2^26 · 2^40 / cycle_ns) + 1 < 2^40: fits an i64 as is.
+        let q = per_cycle as i64;
+        let measured = if err < 0 { -q } else { q };
+        if measured.unsigned_abs() > MAX_RATE_Q40 {
+            self.lock(sof, counter);
+            return true;
+        }
+        let rate = if self.rate_valid {
+            self.rate_q40 + div4(measured - self.rate_q40)
+        } else {
+            measured
+        };
+        self.set_rate(rate);
+        self.rate_valid = true;
+        self.abs_cycle = self.abs_cycle.saturating_add(1);
+        self.anchor_local = sof;
+        self.anchor_bus = self.anchor_bus.saturating_add(self.cycle_ns);
+        self.counter = counter;
+        true
     }
 
     /// A plausible sync `d_cycles` (> 0) cycles after the last, its SOF `err` ns off the
@@ -260,12 +297,15 @@ impl SlotClock {
     /// Local ns per bus ns, as `2^16 ·` a length: the local length of `bus_ns` × 2^16,
     /// rounded (for the engine's slot map; a multiply, no division).
     pub fn local_q16(&self, bus_ns: Nanos) -> u64 {
-        let d = nanos_i64(bus_ns);
-        if d >> 29 == 0 && self.rate_q40.unsigned_abs() <= MAX_RATE_Q40 {
-            // A slot of up to 0.5 s: `d · rate` fits in 64 bits (no 128-bit product).
-            let extra = (d * self.rate_q40 + (1 << (Q - 17))) >> (Q - 16);
-            return clamp_nanos((d << 16) + extra);
+        if bus_ns >> 29 == 0 && self.rate_q40.unsigned_abs() <= MAX_RATE_Q40 {
+            // A slot of up to 0.5 s: `d · rate` fits in 64 bits (no 128-bit product), and
+            // with d < 2^32 it is a 32 × 64 product (two multiplies, not three). |rate| <=
+            // 1 % + 2^-40 keeps |extra| <= d · 2^16, so the sum is >= 0 (no clamp).
+            let d = bus_ns as u32;
+            let extra = (i64::from(d) * self.rate_q40 + (1 << (Q - 17))) >> (Q - 16);
+            return ((u64::from(d) << 16) as i64 + extra) as u64;
         }
+        let d = nanos_i64(bus_ns);
         clamp_nanos(scale(d.saturating_mul(1 << 16), self.rate_q40))
     }
     /// Bus ns per local ns × 2^32, rounded (the engine's inverse slot map).
@@ -395,10 +435,14 @@ fn inverse_q40(a: i64) -> i64 {
     // |A| <= MAX_RATE_Q40 < 2^34, so A >> 6 fits in an i32, and every term from A² on
     // is below 2^27 units: each product is one 32 × 32 → 64 multiply and the terms are
     // 32-bit (64 × 64 products and 64-bit terms cost three times as much, issue 10).
-    let a6 = (a >> 6) as i32;
-    if a == 0 {
-        return 0;
+    if a.unsigned_abs() < 1 << 26 {
+        // |A| < 2^26 units (61 ppm: every crystal's tolerance): the loop below stops
+        // after A², as A³'s term rounds to 0 (A² < 2^12 units, so (A² >> 6) · (A >> 6)
+        // < 2^26 and adding 2^27 stays below 2^28). The same value without the loop.
+        let a6 = i64::from((a >> 6) as i32);
+        return -a + ((a6 * a6 + (1 << 27)) >> 28);
     }
+    let a6 = (a >> 6) as i32;
     let mut sum = -a;
     // A^(k+1) with the sign flipped: the series alternates.
     let next = |t6: i32| -(((i64::from(t6) * i64::from(a6) + (1 << 27)) >> 28) as i32);
@@ -479,6 +523,16 @@ fn nanos_i64(t: Nanos) -> i64 {
     i64::try_from(t).unwrap_or(i64::MAX)
 }
 
+/// `nanos_i64(a) - nanos_i64(b)` (cannot overflow: both are in `0..=i64::MAX`), by one
+/// subtraction while both times are below 2^63 ns (always, short of 292 years).
+fn nanos_diff(a: Nanos, b: Nanos) -> i64 {
+    if (a | b) >> 63 == 0 {
+        a.wrapping_sub(b) as i64
+    } else {
+        nanos_i64(a) - nanos_i64(b)
+    }
+}
+
 fn clamp_nanos(v: i64) -> Nanos {
     Nanos::try_from(v.max(0)).unwrap_or(0)
 }
@@ -522,7 +576,28 @@ mod tests {
             assert_eq!(inverse_q40(a), reference(a), "{a}");
             a += 7_919_977;
         }
-        for a in [-max, -1, 0, 1, 63, 64, -64, -65, max] {
+        let near = (1i64 << 26) - 1;
+        for a in [
+            -max,
+            -1,
+            0,
+            1,
+            63,
+            64,
+            -64,
+            -65,
+            max,
+            near,
+            -near,
+            near + 1,
+            -near - 1,
+            near - 63,
+            -near + 63,
+        ] {
+            assert_eq!(inverse_q40(a), reference(a), "{a}");
+        }
+        // Every value near the edge of the loop-free range.
+        for a in (near - 5_000..near + 5_000).chain(-near - 5_000..-near + 5_000) {
             assert_eq!(inverse_q40(a), reference(a), "{a}");
         }
     }
@@ -675,6 +750,25 @@ mod tests {
             i64::MAX,
         ] {
             assert_eq!(div4(x), x / 4, "{x}");
+        }
+    }
+
+    #[test]
+    fn nanos_diff_equals_the_saturated_difference() {
+        let t = [
+            0u64,
+            1,
+            7,
+            1 << 40,
+            (1 << 63) - 1,
+            1 << 63,
+            u64::MAX - 1,
+            u64::MAX,
+        ];
+        for a in t {
+            for b in t {
+                assert_eq!(nanos_diff(a, b), nanos_i64(a) - nanos_i64(b), "{a} {b}");
+            }
         }
     }
 

@@ -20,7 +20,7 @@ use crate::frame::Frame;
 use crate::heartbeat::{heartbeat_frame, parse_heartbeat, Heartbeat};
 use crate::id::{CanId, Class, FIRST_TOPIC_MSG_ID, HEARTBEAT_BASE, LAXITY_HRT, LAXITY_NRT};
 use crate::queue::EdfQueue;
-use crate::sync::{parse_sync, sync_frame, Sync};
+use crate::sync::{sync_frame, Sync, SyncFormat};
 use crate::tables::NodeTables;
 use crate::time::{Nanos, SNanos};
 use crate::timing::{bits_to_ns, worst_case_bits};
@@ -320,6 +320,8 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     silent_since: Nanos,
     /// Cycle length (ns), precomputed for the per-slot stall test.
     cycle_ns: Nanos,
+    /// The sync frame's checks for this bus (precomputed: a slave parses one per cycle).
+    sync_format: SyncFormat,
     /// Last fault-confinement state reported by the driver.
     error: ErrorState,
     /// Next transfer ID of each transmit topic (index = `TxIndex`, a `u8`, so every
@@ -395,6 +397,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             },
             silent_since: now,
             cycle_ns: bus.cycle_ns(),
+            sync_format: SyncFormat::new(bus.slots_per_cycle),
             error: ErrorState {
                 tec: 0,
                 rec: 0,
@@ -1205,8 +1208,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         can: &mut impl Controller,
         host: &mut impl Host,
     ) {
-        let spc = self.tables.bus.slots_per_cycle;
-        let Some(sync) = parse_sync(frame, spc) else {
+        let Some(sync) = self.sync_format.parse(frame) else {
             Counters::bump(&mut self.counters.rx_bad_sync);
             return;
         };

@@ -63,19 +63,52 @@ pub fn sync_frame(sync: Sync, slots: u8) -> Frame {
 /// Parses a frame whose ID `is_sync()`; `None` for garbage (wrong DLC, mask bits past
 /// `slots`, slot 0 not reserved).
 pub fn parse_sync(frame: &Frame, slots: u8) -> Option<Sync> {
-    let id = frame.id();
-    if !id.is_sync() || slots == 0 || slots > MAX_SLOTS || frame.dlc() != sync_dlc(slots) {
-        return None;
+    SyncFormat::new(slots).parse(frame)
+}
+
+/// The checks of `parse_sync` for a bus of `slots` slots, precomputed once (the engine
+/// keeps one): the DLC and the mask bits a sync may not carry, so that a slave's sync
+/// parses with two compares (issue 10: the sync's CPU time).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SyncFormat {
+    /// `sync_dlc(slots)`; 0xFF (no frame has it) for an invalid slot count.
+    dlc: u8,
+    /// Bits checked in the mask: slot 0 (must be set) and every bit past `slots` (must
+    /// be clear); the masked value must be exactly 1.
+    checked: u64,
+}
+
+impl SyncFormat {
+    /// For `slots` slots per cycle (1..=64; other counts parse nothing).
+    pub const fn new(slots: u8) -> Self {
+        if slots == 0 || slots > MAX_SLOTS {
+            return SyncFormat {
+                dlc: 0xFF,
+                checked: u64::MAX,
+            };
+        }
+        SyncFormat {
+            dlc: sync_dlc(slots),
+            checked: !slots_mask(slots) | 1,
+        }
     }
-    // Bytes past the DLC are zero (a `Frame` invariant), so all 8 can be read.
-    let mask = u64::from_le_bytes(*frame.raw_data());
-    if mask & 1 == 0 || mask & !slots_mask(slots) != 0 {
-        return None;
+
+    /// `parse_sync(frame, slots)`.
+    pub fn parse(&self, frame: &Frame) -> Option<Sync> {
+        let id = frame.id();
+        if !id.is_sync() || frame.dlc() != self.dlc {
+            return None;
+        }
+        // Bytes past the DLC are zero (a `Frame` invariant), so all 8 can be read.
+        let mask = u64::from_le_bytes(*frame.raw_data());
+        if mask & self.checked != 1 {
+            return None;
+        }
+        Some(Sync {
+            cycle: (id.raw() % CYCLE_COUNTER_MODULUS) as u16,
+            mask,
+        })
     }
-    Some(Sync {
-        cycle: (id.raw() % CYCLE_COUNTER_MODULUS) as u16,
-        mask,
-    })
 }
 
 /// Fallbacks for the two constructors `sync_frame` calls with arguments that are always in
@@ -107,6 +140,66 @@ mod tests {
 
     use super::*;
     use crate::id::MsgId;
+
+    /// `parse_sync` as specified (docs/PROTOCOL.md §3), check by check: the reference
+    /// for the precomputed `SyncFormat`.
+    fn parse_reference(frame: &Frame, slots: u8) -> Option<Sync> {
+        let id = frame.id();
+        if !id.is_sync() || slots == 0 || slots > MAX_SLOTS || frame.dlc() != sync_dlc(slots) {
+            return None;
+        }
+        let mask = u64::from_le_bytes(*frame.raw_data());
+        if mask & 1 == 0 || mask & !slots_mask(slots) != 0 {
+            return None;
+        }
+        Some(Sync {
+            cycle: (id.raw() % CYCLE_COUNTER_MODULUS) as u16,
+            mask,
+        })
+    }
+
+    #[test]
+    fn precomputed_format_parses_as_the_reference() {
+        let masks = [
+            0u64,
+            1,
+            2,
+            3,
+            0xFF,
+            0x1FF,
+            0xFFFF_FFFF,
+            0x1_FFFF_FFFF,
+            u64::MAX,
+            u64::MAX - 1,
+            1 << 63 | 1,
+            0x8000_0001,
+        ];
+        let ids = [
+            CanId::from_raw(0),
+            CanId::from_raw(12_345),
+            CanId::from_raw(CYCLE_COUNTER_MODULUS - 1),
+            CanId::new(1, MsgId(3), 0),
+            CanId::new(0, MsgId(0x300), 5),
+        ];
+        let mut parsed = 0;
+        for slots in 0..=70u8 {
+            let format = SyncFormat::new(slots);
+            for id in ids.into_iter().flatten() {
+                for dlc in 0..=8u8 {
+                    for mask in masks {
+                        let Some(frame) = Frame::from_parts(id, dlc, mask.to_le_bytes()) else {
+                            continue;
+                        };
+                        let want = parse_reference(&frame, slots);
+                        parsed += usize::from(want.is_some());
+                        assert_eq!(format.parse(&frame), want, "{slots} {id:?} {dlc} {mask:x}");
+                        assert_eq!(parse_sync(&frame, slots), want);
+                    }
+                }
+            }
+        }
+        assert!(parsed > 100, "only {parsed} valid syncs");
+    }
 
     #[test]
     fn wrap_is_multiple_of_hyperperiod() {

@@ -48,8 +48,11 @@ pub struct SofClock {
     updated: i64,
     /// Estimated counter value (unwrapped) at `updated`, and its local time under the
     /// current offset (`offset + anchor_bits * bit_ns`, kept to avoid the multiply).
-    anchor_bits: i64,
+    anchor_bits: u32,
     anchor_local: i64,
+    /// `bit_ns` in 4 … 2^31 − 1 (every CAN rate): frames close together take the
+    /// 32-bit `sof_near`.
+    narrow: bool,
 }
 
 /// Gaps between frames below this many ns take the 32-bit path (multiply and shift);
@@ -84,6 +87,7 @@ impl SofClock {
             updated: 0,
             anchor_bits: 0,
             anchor_local: 0,
+            narrow: bit_ns >= 4 && bit_ns <= i32::MAX as u64,
         }
     }
 
@@ -98,7 +102,7 @@ impl SofClock {
             // First frame: anchor the counter at this stamp (its wraps are absorbed).
             self.offset = Some(now - (time16 as i64 + bits) * bit);
             self.updated = now;
-            self.anchor_bits = time16 as i64 + bits;
+            self.anchor_bits = time16 as u32 + bits as u32;
             self.anchor_local = now;
             return (now - bits * bit).max(0) as u64;
         };
@@ -106,8 +110,10 @@ impl SofClock {
         // counter too low: estimate against an offset lowered by the drift bound. The
         // estimate only needs to be within ±32 767 bits: a bit of rounding is harmless.
         let elapsed = now - self.updated;
+        if self.narrow && (0..FAST_GAP_NS).contains(&elapsed) {
+            return self.sof_near(time16, bits as u32, now, elapsed as u32, offset);
+        }
         let (drift, gap_bits) = if (0..FAST_GAP_NS).contains(&elapsed) {
-            // The common case, frames less than 2 s apart: one 32 × 32 → 64 multiply each.
             let e = elapsed as u32;
             let drift = ((e as u64 * self.drift_q20 as u64 + (1 << 20) - 1) >> 20) as u32;
             let gap = e.saturating_add(drift);
@@ -118,7 +124,8 @@ impl SofClock {
             let drift = (e * self.drift_q20 as i64 + (1 << 20) - 1) >> 20;
             (drift, (e + drift) / bit)
         };
-        let est16 = (self.anchor_bits + gap_bits - bits) as u16;
+        // The counter is only ever needed modulo 2^16: `anchor_bits` wraps.
+        let est16 = (self.anchor_bits as i64 + gap_bits - bits) as u16;
         // Nearest value congruent to the stamp (mod 2^16), relative to the anchor.
         let rel = gap_bits - bits + time16.wrapping_sub(est16) as i16 as i64;
         let sof_local = self.anchor_local + rel * bit;
@@ -128,7 +135,65 @@ impl SofClock {
         self.offset = Some(offset + d);
         // New anchor: the counter at `now` per the new offset.
         let k = self.bits_in(excess - d);
-        self.anchor_bits += rel + bits + k;
+        self.anchor_bits = (self.anchor_bits as i64).wrapping_add(rel + bits + k) as u32;
+        self.anchor_local = sof_local + d + (bits + k) * bit;
+        self.updated = now;
+        (sof_local + d).max(0) as u64
+    }
+
+    /// `sof` for a frame less than 2^31 ns (2.1 s) after the last (`elapsed`), on a clock
+    /// built `narrow`: the same arithmetic as the general path with 32-bit operands and
+    /// 32 × 32 → 64 products (issue 10: every received frame runs this; the test
+    /// `near_path_equals_the_general_path` compares both). The bounds, with `bit_ns` in
+    /// 4 … 2^31 − 1 (`narrow`):
+    /// - `drift` and `gap` are the general path's 32-bit values (`gap` <= 2^32 − 1);
+    /// - gap_bits = gap · ceil(2^32 / bit_ns) / 2^32 < 2^30 (bit_ns >= 4);
+    /// - rel = gap_bits − bits + (−2^15 … 2^15 − 1) lies in −2^17 … 2^30 + 2^15: an i32;
+    /// - `excess − d` is checked against the 32-bit range like `bits_in` does.
+    fn sof_near(&mut self, time16: u16, bits: u32, now: i64, e: u32, offset: i64) -> u64 {
+        let bit = self.bit_ns as u32;
+        let drift = ((e as u64 * self.drift_q20 as u64 + (1 << 20) - 1) >> 20) as u32;
+        let gap = e.saturating_add(drift);
+        let gap_bits = ((gap as u64 * self.inv_bit_q32 as u64) >> 32) as u32;
+        let est16 = self.anchor_bits.wrapping_add(gap_bits).wrapping_sub(bits) as u16;
+        let rel = gap_bits as i32 - bits as i32 + time16.wrapping_sub(est16) as i16 as i32;
+        let sof_local = self.anchor_local + rel as i64 * bit as i64;
+        let excess = now - sof_local - (bits as u64 * bit as u64) as i64;
+        let d = excess.min(drift as i64);
+        self.offset = Some(offset + d);
+        let rest = excess - d;
+        let k = if (0..FAST_GAP_NS).contains(&rest) {
+            ((rest as u64 * self.inv_bit_q32 as u64) >> 32) as u32
+        } else {
+            // A better frame than any before by over 2 s: not on a working bus.
+            return self.sof_far(rel, bits, excess, d, sof_local, now);
+        };
+        self.anchor_bits = self
+            .anchor_bits
+            .wrapping_add(rel as u32)
+            .wrapping_add(bits)
+            .wrapping_add(k);
+        // bits + k <= 2^16 + 2^31 / 4: a u32, and the product a 32 × 32 → 64 multiply.
+        self.anchor_local = sof_local + d + (bits + k) as u64 as i64 * bit as i64;
+        self.updated = now;
+        (sof_local + d).max(0) as u64
+    }
+
+    /// The end of `sof_near` when the new anchor is more than 2^31 ns off (the general
+    /// path's arithmetic).
+    #[cold]
+    fn sof_far(
+        &mut self,
+        rel: i32,
+        bits: u32,
+        excess: i64,
+        d: i64,
+        sof_local: i64,
+        now: i64,
+    ) -> u64 {
+        let (rel, bits, bit) = (rel as i64, bits as i64, self.bit_ns);
+        let k = self.bits_in(excess - d);
+        self.anchor_bits = (self.anchor_bits as i64).wrapping_add(rel + bits + k) as u32;
         self.anchor_local = sof_local + d + (bits + k) * bit;
         self.updated = now;
         (sof_local + d).max(0) as u64
@@ -329,6 +394,69 @@ mod tests {
                 origin + s * BIT,
                 "frame at {s} bits"
             );
+        }
+    }
+
+    /// The 32-bit `sof_near` against the general path (a clock with `narrow` off) over
+    /// random traffic: every result and the state after each frame are the same.
+    #[test]
+    fn near_path_equals_the_general_path() {
+        for (bit, ppm, seed) in [
+            (1_000u32, 200u32, 1u32),
+            (4, 100, 2),
+            (2_000, 5_000, 3),
+            (100_000, 50, 4),
+            (1_000, 1_000_000, 5),
+        ] {
+            let mut near = SofClock::new(bit, ppm);
+            let mut general = near;
+            general.narrow = false;
+            assert!(near.narrow);
+            let mut rng = Rng(seed);
+            let mut now = 5_000_000u64;
+            let mut sof_bits = 12_345u64;
+            for k in 0..3_000 {
+                // Gaps from back to back to ~3 s (beyond the 32-bit range), latencies up
+                // to 100 µs, and now and then a frame with a smaller latency than before.
+                let gap = match rng.next() % 16 {
+                    0 => 2_000_000_000 + u64::from(rng.next() % 1_500_000_000),
+                    1 => 0,
+                    _ => u64::from(rng.next() % 2_000_000),
+                };
+                sof_bits += gap / u64::from(bit) + 1;
+                let dlc = (rng.next() % 9) as u8;
+                let latency = u64::from(rng.next() % 100_000);
+                now = now.max(
+                    5_000_000
+                        + (sof_bits + u64::from(valid_bits_min(dlc))) * u64::from(bit)
+                        + latency,
+                );
+                let t16 = sof_bits as u16;
+                let (a, b) = (
+                    near.sof(t16, valid_bits_min(dlc), now),
+                    general.sof(t16, valid_bits_min(dlc), now),
+                );
+                assert_eq!(a, b, "bit {bit} frame {k}");
+                assert_eq!(
+                    (
+                        near.offset,
+                        near.updated,
+                        near.anchor_local,
+                        near.anchor_bits as u16
+                    ),
+                    (
+                        general.offset,
+                        general.updated,
+                        general.anchor_local,
+                        general.anchor_bits as u16
+                    ),
+                    "bit {bit} frame {k}"
+                );
+            }
+        }
+        // Not narrow: 1-ns and 2-ns bits (not CAN rates) and bits beyond 2^31 ns.
+        for bit in [1u32, 2, 3, 1 << 31, u32::MAX] {
+            assert!(!SofClock::new(bit, 100).narrow, "{bit}");
         }
     }
 
