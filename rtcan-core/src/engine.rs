@@ -717,7 +717,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         self.master = true;
         self.tables.master_masks = masks;
         self.clock = SlotClock::master(&bus, start_local.saturating_sub(c0.saturating_mul(cycle)));
-        self.enter_cycle(c0, 0);
+        self.enter_cycle(c0, 0, self.clock.cycle_start_bus(c0));
         self.pos.start_local = start_local;
         self.pos.slot_q16 = bus.slot_ns.max(1) << 16;
         self.pos.inv_q32 = 1 << 32;
@@ -750,7 +750,8 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         // Cycles `a .. a + ahead` are skipped (`a` never started).
         let ahead = (now - self.pos.start_local) / cycle_local;
         let skipped = ahead;
-        self.enter_cycle(self.pos.abs_cycle.saturating_add(ahead), 0);
+        let abs = self.pos.abs_cycle.saturating_add(ahead);
+        self.enter_cycle(abs, 0, self.clock.cycle_start_bus(abs));
         let p = &mut self.pos;
         p.start_local += ahead * cycle_local;
         // Keep the heartbeat stagger; a heartbeat due in a skipped cycle goes out next.
@@ -774,19 +775,18 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     }
 
     /// Moves the position to absolute cycle `abs_cycle`, resuming at `next_slot`: the
-    /// derived counters (hyperperiod phase, sync counter), its bus start `abs_cycle ·
-    /// cycle_ns` and the calendar cursor. The caller sets the local map. One copy of
-    /// these divisions for sync, takeover and skip.
+    /// derived counters (hyperperiod phase, sync counter), its bus start `start_bus`
+    /// (`clock.cycle_start_bus(abs_cycle)`, which a sync has at hand as the clock's
+    /// anchor) and the calendar cursor. The caller sets the local map. One copy of these
+    /// divisions for sync, takeover and skip.
     #[inline(never)]
-    fn enter_cycle(&mut self, abs_cycle: u64, next_slot: u8) {
+    fn enter_cycle(&mut self, abs_cycle: u64, next_slot: u8, start_bus: Nanos) {
         let bus = &self.tables.bus;
         let p = &mut self.pos;
         p.abs_cycle = abs_cycle;
         p.cycle_in_hyper = mod_small(abs_cycle, bus.hyperperiod_cycles);
         p.counter = mod_small(abs_cycle, bus.cycle_counter_wrap);
-        // `abs_cycle · cycle_ns`; the clock's anchor when it is the last sync's cycle (a
-        // saturating 64-bit product otherwise).
-        p.start_bus = self.clock.cycle_start_bus(abs_cycle);
+        p.start_bus = start_bus;
         p.next_slot = next_slot;
         self.cursor = CalendarCursor::default();
     }
@@ -1228,7 +1228,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if !self.clock.on_sync(sof, sync.cycle) {
             return;
         }
-        let bus = self.tables.bus;
+        let slot_ns = self.tables.bus.slot_ns;
         // At the sync just handled the cycle map starts at the clock's anchor.
         let (abs_cycle, start_bus, start_local) = match self.clock.anchor_cycle(sof) {
             Some(c) => c,
@@ -1244,14 +1244,14 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if !was_synced || abs_cycle != self.pos.abs_cycle {
             // (Re)start the slot sequence at slot 1 of this cycle: first lock, or the sync
             // is not for the cycle this node is executing (its clock ran slow, or a jump).
-            self.enter_cycle(abs_cycle, 1);
+            self.enter_cycle(abs_cycle, 1, start_bus);
         }
         // Refresh the cycle map from the slot clock: offset from this SOF, slot length and
         // inverse from the rate factors (multiplies; no division when this sync follows
         // the last one by a cycle, `SlotClock::on_sync`).
         self.pos.start_bus = start_bus;
         self.pos.start_local = start_local;
-        self.pos.slot_q16 = self.clock.local_q16(bus.slot_ns).max(1 << 16);
+        self.pos.slot_q16 = self.clock.local_q16(slot_ns).max(1 << 16);
         self.pos.inv_q32 = self.clock.bus_per_local_q32();
         self.next_boundary = self.pos.boundary(self.pos.next_slot);
         if !was_synced && self.is_synced() {
