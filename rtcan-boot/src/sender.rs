@@ -9,7 +9,8 @@
 //!   last acknowledged point (`Begin`, the first unacknowledged `Data`, or `End`);
 //! - `Failed { why }`: the update is over, nothing committed.
 //!
-//! No heap: the image is borrowed, one request's payload is built at a time.
+//! No heap: the image is the caller's (`&[u8]` on a module), one request's payload is
+//! built at a time.
 use rtcan_core::{Frame, Nanos};
 
 use crate::can::{parse_reply, request_frame, request_payload, REQUEST_BYTES, REQUEST_FRAMES};
@@ -78,10 +79,17 @@ struct Current {
     counter: u8,
 }
 
+fn start(msg: Msg<'_>) -> Option<Current> {
+    Some(Current {
+        payload: request_payload(&msg)?,
+        counter: REQUEST_FRAMES - 1,
+    })
+}
+
 /// The host side of one module's update.
-pub struct Sender<'i> {
+pub struct Sender<I: AsRef<[u8]>> {
     module: u8,
-    image: &'i [u8],
+    image: I,
     fingerprint: u32,
     cfg: Config,
     phase: Phase,
@@ -102,9 +110,9 @@ pub struct Sender<'i> {
     pub stats: Stats,
 }
 
-impl<'i> Sender<'i> {
+impl<I: AsRef<[u8]>> Sender<I> {
     /// The update of `module` with `image`, built for the robot of `fingerprint`.
-    pub fn new(module: u8, image: &'i [u8], fingerprint: u32, cfg: Config) -> Self {
+    pub fn new(module: u8, image: I, fingerprint: u32, cfg: Config) -> Self {
         Sender {
             module,
             image,
@@ -124,7 +132,7 @@ impl<'i> Sender<'i> {
     }
 
     fn len(&self) -> u32 {
-        u32::try_from(self.image.len()).unwrap_or(u32::MAX)
+        u32::try_from(self.image.as_ref().len()).unwrap_or(u32::MAX)
     }
 
     /// The result, once over.
@@ -145,15 +153,6 @@ impl<'i> Sender<'i> {
         self.cur = None;
     }
 
-    fn start(&mut self, msg: Msg<'_>) {
-        if let Some(payload) = request_payload(&msg) {
-            self.cur = Some(Current {
-                payload,
-                counter: REQUEST_FRAMES - 1,
-            });
-        }
-    }
-
     /// Builds the next request if one is due and none is being sent.
     fn refill(&mut self) {
         if self.cur.is_some() {
@@ -162,28 +161,29 @@ impl<'i> Sender<'i> {
         match self.phase {
             Phase::Begin if !self.asked => {
                 self.asked = true;
-                self.start(Msg::Begin {
+                self.cur = start(Msg::Begin {
                     len: self.len(),
-                    crc: Crc32::of(self.image),
+                    crc: Crc32::of(self.image.as_ref()),
                     fingerprint: self.fingerprint,
                 });
             }
             Phase::Data if self.sent_upto < self.len() && self.in_flight < self.cfg.window => {
                 let from = self.sent_upto as usize;
-                let to = (from + MAX_CHUNK).min(self.image.len());
-                let Some(bytes) = self.image.get(from..to) else {
+                let image = self.image.as_ref();
+                let to = (from + MAX_CHUNK).min(image.len());
+                let Some(bytes) = image.get(from..to) else {
                     return;
                 };
                 self.in_flight += 1;
                 self.sent_upto = to as u32;
-                self.start(Msg::Data {
+                self.cur = start(Msg::Data {
                     offset: from as u32,
                     bytes,
                 });
             }
             Phase::End if !self.asked => {
                 self.asked = true;
-                self.start(Msg::End);
+                self.cur = start(Msg::End);
             }
             _ => {}
         }

@@ -30,7 +30,7 @@ fn exchange<'i>(
     img: &'i [u8],
     fp: u32,
     lose: impl Fn(u64, &Frame) -> bool,
-) -> (Outcome, Sender<'i>) {
+) -> (Outcome, Sender<&'i [u8]>) {
     let mut s = Sender::new(2, img, fp, Config::default());
     // The module runs what its bootloader booted; the update goes to the other slot.
     let running = LAYOUT.boot_slot(f, None);
@@ -155,7 +155,7 @@ fn bad_images_are_refused_over_the_bus() {
     // the image CRC refuses it.
     let mut f3 = f.clone();
     let img = image(3000, 7, 4);
-    let mut s = Sender::new(2, &img, 7, Config::default());
+    let mut s = Sender::new(2, &img[..], 7, Config::default());
     let mut port = Port::new(2, &LAYOUT, Some(0));
     let mut last = None;
     for step in 0..100_000u64 {
@@ -182,7 +182,7 @@ fn bad_images_are_refused_over_the_bus() {
     assert_eq!(last, Some(Reply::Failed { why: Why::Crc }));
     assert_eq!(LAYOUT.boot_slot(&f3, Some(7)), Some(0));
     // A module that never answers: the sender gives up after its retries.
-    let mut s = Sender::new(5, &img, 7, Config::default());
+    let mut s = Sender::new(5, &img[..], 7, Config::default());
     let mut t = 0;
     while s.outcome().is_none() && t < 1_000_000_000_000 {
         t += 1_000_000;
