@@ -84,6 +84,9 @@ pub struct PortCounters {
 /// The module side of the update channel.
 pub struct Port<'l> {
     module: u8,
+    /// The robot fingerprint this module was built for: a `Begin` for another robot is
+    /// refused before anything is erased.
+    fingerprint: Option<u32>,
     pub receiver: Receiver<'l>,
     rx: RxState,
     buf: [u8; REQUEST_BYTES],
@@ -99,6 +102,7 @@ impl<'l> Port<'l> {
     pub fn new(module: u8, layout: &'l Layout, running: Option<usize>) -> Self {
         Port {
             module,
+            fingerprint: None,
             receiver: Receiver::new(layout, running),
             rx: RxState::default(),
             buf: [0; REQUEST_BYTES],
@@ -107,6 +111,12 @@ impl<'l> Port<'l> {
             len: 0,
             counters: PortCounters::default(),
         }
+    }
+
+    /// Refuse images announced for another robot than `fingerprint` (at `Begin`).
+    pub fn with_fingerprint(mut self, fingerprint: u32) -> Self {
+        self.fingerprint = Some(fingerprint);
+        self
     }
 
     /// A frame of the update range (`Host::service_rx`). Requests to this module are
@@ -125,7 +135,14 @@ impl<'l> Port<'l> {
                     .split_first()
                     .and_then(|(&n, rest)| rest.get(..usize::from(n)))
                     .unwrap_or(&[]);
-                self.receiver.handle(flash, m)
+                match (Msg::decode(m), self.fingerprint) {
+                    (Some(Msg::Begin { fingerprint, .. }), Some(own)) if fingerprint != own => {
+                        Reply::Failed {
+                            why: crate::update::Why::Fingerprint,
+                        }
+                    }
+                    _ => self.receiver.handle(flash, m),
+                }
             }
             RxStep::Pending => return None,
             RxStep::Restarted | RxStep::Dropped(_) => {

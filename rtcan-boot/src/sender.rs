@@ -254,6 +254,14 @@ impl<I: AsRef<[u8]>> Sender<I> {
         self.stats.replies += 1;
         self.last_activity = Some(now);
         match (self.phase, reply) {
+            // A `Begin` is never answered so: a late reply to an earlier, interrupted
+            // update's requests (the module replies in order, so none comes after Ready).
+            (
+                Phase::Begin,
+                Reply::Failed {
+                    why: Why::NotStarted,
+                },
+            ) => {}
             (_, Reply::Failed { why }) => self.finish(Outcome::Failed(why)),
             (Phase::Begin, Reply::Ready { .. }) => {
                 self.phase = Phase::Data;

@@ -140,6 +140,8 @@ pub struct TriskarRun {
     /// at the end (slot, image length, CRC-32), by bus index.
     pub update: Vec<crate::update::UpdateResult>,
     pub booted: Vec<Option<(usize, u32, u32)>>,
+    /// Per bus index: power cuts the update hit and what booted after each.
+    pub update_cuts: Vec<crate::update::CutLog>,
     /// Sync frames on the wire: cycles with two syncs, longest silence.
     pub syncs: crate::sync_watch::SyncWatch,
     /// Frames outside their slots or windows as the last sync on the wire places them,
@@ -647,6 +649,9 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         update: sh.update.as_ref().map(|u| u.results()).unwrap_or_default(),
         booted: (0..MODULES.len())
             .map(|m| sh.update.as_ref().and_then(|u| u.booted(m)))
+            .collect(),
+        update_cuts: (0..MODULES.len())
+            .map(|m| sh.update.as_ref().map(|u| u.cuts(m)).unwrap_or_default())
             .collect(),
         syncs,
         slots_live: live.map_or((0, 0), |c| (c.bad, c.checked)),

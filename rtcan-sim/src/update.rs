@@ -117,22 +117,22 @@ pub struct ModuleSide {
     cut: Option<Cut>,
     /// Power cuts that hit (global time).
     pub cuts: Vec<Nanos>,
-    /// Times the port started again (power on).
-    pub boots: u32,
+    /// What the bootloader booted at each power-on after a cut: (slot, CRC-32).
+    pub boots: Vec<Option<(usize, u32)>>,
 }
 
 impl ModuleSide {
     fn new(module: usize, flash: Box<SlotFlash>, fingerprint: u32, cut: Option<Cut>) -> Self {
         let running = LAYOUT.boot_slot(&*flash, Some(fingerprint));
         ModuleSide {
-            port: Port::new(module as u8, &LAYOUT, running),
+            port: Port::new(module as u8, &LAYOUT, running).with_fingerprint(fingerprint),
             flash,
             ready: VecDeque::new(),
             busy_until: 0,
             requests: 0,
             cut,
             cuts: Vec::new(),
-            boots: 0,
+            boots: Vec::new(),
         }
     }
 
@@ -143,10 +143,12 @@ impl ModuleSide {
 
     /// Power on: RAM state gone, the bootloader picks the slot from flash.
     fn power_on(&mut self, module: usize, fingerprint: u32) {
-        self.port = Port::new(module as u8, &LAYOUT, self.boot_slot(fingerprint));
+        let slot = self.boot_slot(fingerprint);
+        self.port = Port::new(module as u8, &LAYOUT, slot).with_fingerprint(fingerprint);
         self.ready.clear();
         self.busy_until = 0;
-        self.boots += 1;
+        let crc = slot.and_then(|s| LAYOUT.header(&*self.flash, s).map(|h| (s, h.crc)));
+        self.boots.push(crc);
     }
 
     /// A frame of the update range at global time `g`; `Some(down_ns)` if a power
@@ -189,10 +191,18 @@ impl ModuleSide {
     }
 }
 
+/// A module's power cuts (global times) and what booted after each power-on (slot,
+/// CRC-32; `None`: nothing valid).
+pub type CutLog = (Vec<Nanos>, Vec<Option<(usize, u32)>>);
+
+/// The update in progress: module, image bytes, sender, time of its first frame and of
+/// its last reply.
+type Current = (usize, usize, Sender<Vec<u8>>, Option<Nanos>, Nanos);
+
 /// The host behind the gateway.
 pub struct HostSide {
     pending: VecDeque<Target>,
-    current: Option<(usize, usize, Sender<Vec<u8>>, Option<Nanos>, Nanos)>,
+    current: Option<Current>,
     config: Config,
     start_ns: Nanos,
     pub results: Vec<UpdateResult>,
@@ -305,6 +315,14 @@ impl UpdateBus {
         let mut r = self.host.results.clone();
         r.extend(self.host.unfinished());
         r
+    }
+
+    /// Module `m`'s power cuts (global times) and what it booted after each power-on.
+    pub fn cuts(&self, m: usize) -> CutLog {
+        match self.modules.get(m) {
+            Some(Some(s)) => (s.cuts.clone(), s.boots.clone()),
+            _ => (Vec::new(), Vec::new()),
+        }
     }
 
     /// The CRC-32 of what module `m` would boot (slot, length, CRC), if anything.

@@ -84,3 +84,80 @@ fn a_28_kib_image_in_budget_with_the_robot_running() {
     }
     assert!(r.stopped_short());
 }
+
+/// A power cut (the module's supply) during every request of a small update, at the
+/// first, a middle and the last flash operation of the request: the module boots the
+/// old image or the new one, never nothing, and running the update again completes.
+#[test]
+fn power_cut_at_every_protocol_step_leaves_a_bootable_module() {
+    let fp = rtcan::robot_toml::FINGERPRINT;
+    let old = test_image(4096, fp, 0);
+    let new = test_image(2000, fp, 7);
+    let t = Target {
+        module: 3,
+        image: new.clone(),
+        fingerprint: fp,
+    };
+    // Flash operations per request: Begin erases 30 pages, each Data programs 125
+    // half-words (the last 0 bytes… 2000 = 8 × 250), End commits the 9-half-word header.
+    let ops: Vec<u32> = [30].into_iter().chain([125; 8]).chain([9]).collect();
+    let mut cuts = 0;
+    for (request, &n) in ops.iter().enumerate() {
+        for op in [0, n / 2, n - 1] {
+            let mut j = job(vec![t.clone(), t.clone()]);
+            j.cut = Some((
+                3,
+                Cut {
+                    request: request as u32,
+                    op,
+                    down_ns: 50_000_000,
+                },
+            ));
+            let r = run(6.0, Some(j));
+            let (at, boots) = &r.update_cuts[3];
+            assert_eq!(at.len(), 1, "request {request} op {op}: the cut hit");
+            cuts += 1;
+            // After the cut: the old image (slot 0), never nothing.
+            assert_eq!(boots[0], Some((0, crc(&old))), "request {request} op {op}");
+            // The second run (or already the first, resumed by a repeated Begin) completes.
+            let last = r.update.last().unwrap();
+            assert!(
+                matches!(last.outcome, Some(Outcome::Done { .. })),
+                "request {request} op {op}: {:?}",
+                r.update
+            );
+            assert_eq!(r.booted[3].map(|b| (b.1, b.2)), Some((2000, crc(&new))));
+        }
+    }
+    assert_eq!(cuts, 30);
+}
+
+#[test]
+fn images_for_another_robot_are_refused() {
+    let fp = rtcan::robot_toml::FINGERPRINT;
+    let old = test_image(4096, fp, 0);
+    let r = run(
+        3.0,
+        Some(job(vec![
+            // Announced for another robot: refused at Begin, nothing erased.
+            Target {
+                module: 2,
+                image: test_image(3000, fp ^ 1, 1),
+                fingerprint: fp ^ 1,
+            },
+            // Built for another robot, announced as this one: refused at End.
+            Target {
+                module: 4,
+                image: test_image(3000, fp ^ 1, 2),
+                fingerprint: fp,
+            },
+        ])),
+    );
+    assert_eq!(r.update[0].outcome, Some(Outcome::Failed(Why::Fingerprint)));
+    assert_eq!(r.update[0].frames, 32, "one Begin");
+    assert_eq!(r.update[1].outcome, Some(Outcome::Failed(Why::Fingerprint)));
+    assert_eq!(r.update[1].frames, 14 * 32, "Begin, 12 Data, End");
+    for m in [2, 4] {
+        assert_eq!(r.booted[m], Some((0, 4096, crc(&old))), "module {m}");
+    }
+}
