@@ -6,8 +6,11 @@
 //!
 //! Flash takes time: a module's reply leaves once the flash operations of its request
 //! are over, at the F103's worst-case datasheet figures (`ERASE_NS` per page,
-//! `PROGRAM_NS` per half-word). The gateway link itself is not modelled (the host's
-//! frames are in the gateway's hands at once).
+//! `PROGRAM_NS` per half-word). The gateway link (USART 115 200 Bd, `triskar2-link`
+//! framing) carries each request to the gateway before its first frame can go on the
+//! bus: `LINK_NS` per request, one request after the other, not overlapped with the bus
+//! (conservative: a gateway buffering requests would overlap them). The replies' way
+//! back over the link (13 bytes, 1.1 ms) is not modelled.
 use std::collections::VecDeque;
 
 use rtcan_boot::can::Port;
@@ -34,6 +37,11 @@ pub type SlotFlash = F103Flash<60>;
 pub const ERASE_NS: Nanos = 40_000_000;
 /// F103 half-word program, worst case (datasheet t_PROG 70 µs).
 pub const PROGRAM_NS: Nanos = 70_000;
+
+/// One request over the gateway link: `COBS(topic, 256-byte payload, CRC-16)` and the
+/// 0x00 delimiter = 1 + 256 + 2 + 2 COBS code bytes + 1 = 262 bytes of 10 bits (8N1)
+/// at 115 200 Bd.
+pub const LINK_NS: Nanos = 262 * 10 * 1_000_000_000 / 115_200;
 
 /// A deterministic test image of `len` bytes for the robot of `fingerprint` (the
 /// fingerprint at `LAYOUT.fingerprint_offset`, as the linker places it).
@@ -205,6 +213,10 @@ pub struct HostSide {
     current: Option<Current>,
     config: Config,
     start_ns: Nanos,
+    /// When the request being sent reached the gateway over the link, and when the
+    /// link is free again.
+    link_at: Option<Nanos>,
+    link_free: Nanos,
     pub results: Vec<UpdateResult>,
 }
 
@@ -295,6 +307,8 @@ impl UpdateBus {
                 current: None,
                 config: job.config,
                 start_ns: job.start_ns,
+                link_at: None,
+                link_free: 0,
                 results: Vec::new(),
             },
             modules: sides,
@@ -384,9 +398,21 @@ impl Host for WithUpdate<'_> {
         let bus = self.bus.as_deref_mut()?;
         let g = self.now;
         if self.module == 0 {
-            bus.host.poll(g);
-            let (_, _, s, _, _) = bus.host.current.as_mut()?;
-            s.next_frame(g)
+            let h = &mut bus.host;
+            h.poll(g);
+            let (_, _, s, _, _) = h.current.as_mut()?;
+            let f = s.next_frame(g)?;
+            // A request's frames leave once the whole request came over the link.
+            let at = match h.link_at {
+                Some(at) => at,
+                None => {
+                    let at = h.link_free.max(g) + LINK_NS;
+                    h.link_at = Some(at);
+                    h.link_free = at;
+                    at
+                }
+            };
+            (g >= at).then_some(f)
         } else {
             bus.modules.get(self.module)?.as_ref()?.tx(g)
         }
@@ -400,6 +426,10 @@ impl Host for WithUpdate<'_> {
             if let Some((_, _, s, first, _)) = &mut bus.host.current {
                 s.sent(g);
                 first.get_or_insert(g);
+                // Every request is `REQUEST_FRAMES` frames: the next one needs the link.
+                if s.stats.frames % u32::from(rtcan_boot::can::REQUEST_FRAMES) == 0 {
+                    bus.host.link_at = None;
+                }
             }
         } else if let Some(Some(side)) = bus.modules.get_mut(self.module) {
             side.sent();
