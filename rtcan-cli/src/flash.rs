@@ -81,7 +81,7 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
             s => return Err(format!("unexpected argument `{s}`")),
         }
     }
-    if a.all == !a.modules.is_empty() {
+    if a.all != a.modules.is_empty() {
         return Err("give --module M or --all".into());
     }
     Ok(Some(a))
