@@ -17,6 +17,8 @@
     )
 )]
 
+pub mod can;
+pub mod sender;
 pub mod update;
 
 use rtcan_pubsub::flash::{Flash, FlashError};

@@ -61,6 +61,72 @@ pub enum Reply {
     Failed { why: Why },
 }
 
+impl Why {
+    const ALL: [Why; 7] = [
+        Why::TooLarge,
+        Why::NotStarted,
+        Why::BadMessage,
+        Why::Crc,
+        Why::Fingerprint,
+        Why::Flash,
+        Why::Incomplete,
+    ];
+    /// Wire code (1..=7).
+    pub fn code(self) -> u8 {
+        match self {
+            Why::TooLarge => 1,
+            Why::NotStarted => 2,
+            Why::BadMessage => 3,
+            Why::Crc => 4,
+            Why::Fingerprint => 5,
+            Why::Flash => 6,
+            Why::Incomplete => 7,
+        }
+    }
+    pub fn from_code(c: u8) -> Option<Why> {
+        Why::ALL.into_iter().find(|w| w.code() == c)
+    }
+}
+
+impl Reply {
+    /// Wire form, one 8-byte frame: op, then little-endian fields, zero padded.
+    /// Ready `01 slot`, Ack `02 next:u32`, Done `03 slot seq:u16`, Failed `04 why`.
+    pub fn encode(&self) -> [u8; 8] {
+        match *self {
+            Reply::Ready { slot } => [1, slot, 0, 0, 0, 0, 0, 0],
+            Reply::Ack { next } => {
+                let [n0, n1, n2, n3] = next.to_le_bytes();
+                [2, n0, n1, n2, n3, 0, 0, 0]
+            }
+            Reply::Done { slot, seq } => {
+                let [s0, s1] = seq.to_le_bytes();
+                [3, slot, s0, s1, 0, 0, 0, 0]
+            }
+            Reply::Failed { why } => [4, why.code(), 0, 0, 0, 0, 0, 0],
+        }
+    }
+
+    /// `None` for anything but an 8-byte reply of a known op.
+    pub fn decode(b: &[u8]) -> Option<Reply> {
+        let b: &[u8; 8] = b.try_into().ok()?;
+        let [op, a, c, d, e, ..] = *b;
+        match op {
+            1 => Some(Reply::Ready { slot: a }),
+            2 => Some(Reply::Ack {
+                next: u32::from_le_bytes([a, c, d, e]),
+            }),
+            3 => Some(Reply::Done {
+                slot: a,
+                seq: u16::from_le_bytes([c, d]),
+            }),
+            4 => Some(Reply::Failed {
+                why: Why::from_code(a)?,
+            }),
+            _ => None,
+        }
+    }
+}
+
 fn put(out: &mut [u8], at: usize, bytes: &[u8]) -> Option<()> {
     out.get_mut(at..at + bytes.len())?.copy_from_slice(bytes);
     Some(())

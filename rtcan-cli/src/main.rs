@@ -4,6 +4,7 @@ mod check;
 mod decode;
 mod echo;
 mod emulate;
+mod flash;
 mod link_args;
 mod monitor;
 mod out;
@@ -36,6 +37,9 @@ commands:
   param (list | get <node.name> | set <node.name> <value>) [--sim robot.toml] [--json]
                                 module parameters, range-checked by the module
                                 (docs/SERVICES.md); exit 1 when refused
+  flash [robot.toml] (--module M | --all) [--image FILE] [--json]
+                                firmware update over the bus, simulated robot
+                                (`rtcan flash --help`, docs/SERVICES.md §4)
   help                          this text
 ";
 
@@ -67,6 +71,7 @@ fn run(args: &[String]) -> i32 {
             0
         }
         "param" => param::run(rest),
+        "flash" => flash::run(rest),
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0

@@ -89,4 +89,15 @@ pub trait Host {
     fn module_state(&self) -> u8 {
         0
     }
+    /// A frame of the reserved update range (docs/PROTOCOL.md §2.3, `service.rs`)
+    /// passed the filters; `sof` is its start of frame. Default: ignored.
+    fn service_rx(&mut self, _frame: &Frame, _sof: Nanos) {}
+    /// The next update-channel frame to send, if any: NRT, in the reserved range (else
+    /// the engine discards it). Offered again, unchanged, until `service_sent`: the
+    /// engine keeps one such frame in a mailbox at a time, so they leave in order.
+    fn service_tx(&mut self) -> Option<Frame> {
+        None
+    }
+    /// The frame last returned by `service_tx` was sent (or discarded as not sendable).
+    fn service_sent(&mut self) {}
 }

@@ -202,6 +202,8 @@ enum Item {
     },
     /// This module's heartbeat.
     Heartbeat,
+    /// The host's update-channel frame (`Host::service_tx`), `dlc` data bytes.
+    Service { dlc: u8 },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -981,7 +983,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// Fills free mailboxes with window frames that can finish before the window ends.
     fn refill(&mut self, now: Nanos, can: &mut impl Controller, host: &mut impl Host) {
-        if self.window_end <= now || (self.queue.is_empty() && !self.heartbeat_pending) {
+        if self.window_end <= now
+            || (self.queue.is_empty()
+                && !self.heartbeat_pending
+                && (self.service_loaded() || host.service_tx().is_none()))
+        {
             return;
         }
         let now_bus = self.bus_time(now);
@@ -1005,6 +1011,10 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                         None => continue,
                     }
                 }
+                Item::Service { .. } => match host.service_tx() {
+                    Some(f) => (f, f.dlc()),
+                    None => continue,
+                },
                 Item::Topic {
                     tx,
                     token,
@@ -1112,7 +1122,31 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             self.heartbeat_pending = false;
             return Some((NRT_KEY, Item::Heartbeat));
         }
+        // The update channel last: below every message and the heartbeat, one frame in
+        // a mailbox at a time (in order on the wire, docs/PROTOCOL.md §2.3).
+        if !self.service_loaded() {
+            if let Some(f) = host.service_tx() {
+                if !crate::service::sendable(&f) {
+                    host.service_sent();
+                } else if self.wc(f.dlc()) < remaining {
+                    return Some((NRT_KEY, Item::Service { dlc: f.dlc() }));
+                }
+            }
+        }
         None
+    }
+
+    /// Whether an update-channel frame is in a mailbox.
+    fn service_loaded(&self) -> bool {
+        self.mailboxes.iter().any(|m| {
+            matches!(
+                m,
+                Loaded::Window {
+                    item: Item::Service { .. },
+                    ..
+                }
+            )
+        })
     }
 
     fn item_wc(&self, item: &Item) -> Nanos {
@@ -1147,6 +1181,11 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             return;
         }
         let msg = id.msg_id().0;
+        if crate::service::is_service(id.msg_id()) {
+            // The update channel: the protocol is the host's (docs/SERVICES.md §4).
+            host.service_rx(frame, sof);
+            return;
+        }
         if (HEARTBEAT_BASE..FIRST_TOPIC_MSG_ID).contains(&msg) {
             match parse_heartbeat(frame) {
                 Some(hb) if hb.fingerprint != self.tables.bus.fingerprint => {
@@ -1325,6 +1364,9 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
                 match (item, result) {
                     (Item::Heartbeat, TxResult::Sent) => {}
                     (Item::Heartbeat, _) => self.heartbeat_pending = true,
+                    // Not sent: offered again by the host at the next refill.
+                    (Item::Service { .. }, TxResult::Sent) => host.service_sent(),
+                    (Item::Service { .. }, _) => {}
                     (
                         Item::Topic {
                             tx,
@@ -1500,6 +1542,7 @@ fn mod_small(x: u64, m: u32) -> u32 {
 fn item_dlc(item: &Item, tables: &NodeTables<'_>) -> Option<u8> {
     match *item {
         Item::Heartbeat => Some(5),
+        Item::Service { dlc } => Some(dlc),
         Item::Topic { tx, fragment, .. } => {
             let size = tables.tx.get(tx as usize)?.size as usize;
             let wire = crate::fragment::wire_len(size);

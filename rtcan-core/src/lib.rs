@@ -30,6 +30,7 @@ pub mod heartbeat;
 pub mod id;
 pub mod laxity;
 pub mod queue;
+pub mod service;
 pub mod sync;
 pub mod tables;
 pub mod time;

@@ -45,6 +45,7 @@ pub mod sync_watch;
 pub mod tables;
 pub mod traffic;
 pub mod triskar;
+pub mod update;
 
 pub use bus::{Bus, Module, NodeSetup, WireFrame};
 pub use clock::NodeClock;

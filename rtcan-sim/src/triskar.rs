@@ -55,6 +55,8 @@ pub struct TriskarConfig {
     pub faults: Vec<crate::fault::Fault>,
     /// Every module has a bus guardian (`guardian.rs`).
     pub guardian: bool,
+    /// A firmware update over the bus during the run (`update.rs`, `rtcan flash`).
+    pub update: Option<crate::update::UpdateJob>,
 }
 
 impl Default for TriskarConfig {
@@ -72,6 +74,7 @@ impl Default for TriskarConfig {
             module_dies_at: None,
             faults: Vec::new(),
             guardian: false,
+            update: None,
         }
     }
 }
@@ -133,6 +136,12 @@ pub struct TriskarRun {
     /// With `module_dies_at`: the module table of the current sync master after every
     /// cycle, as decoded from its topic wire form.
     pub supervision: Vec<SupervisionSample>,
+    /// With `update`: every target's result, in order, and what each module would boot
+    /// at the end (slot, image length, CRC-32), by bus index.
+    pub update: Vec<crate::update::UpdateResult>,
+    pub booted: Vec<Option<(usize, u32, u32)>>,
+    /// Per bus index: power cuts the update hit and what booted after each.
+    pub update_cuts: Vec<crate::update::CutLog>,
     /// Sync frames on the wire: cycles with two syncs, longest silence.
     pub syncs: crate::sync_watch::SyncWatch,
     /// Frames outside their slots or windows as the last sync on the wire places them,
@@ -208,6 +217,28 @@ fn firmware_filter(filters: &[(u32, u32)]) -> Filter {
             .map(|(i, &(id, mask))| (mask, id & mask, u8::from(i > 0)))
             .collect(),
     )
+}
+
+/// `firmware_filter` plus the update channel's bank (docs/PROTOCOL.md §10): the
+/// gateway takes every module's replies (`0xFFC0..=0xFFFF`), a module its own requests
+/// (`0xFF80 + m`, any fragment), both NRT.
+fn update_filter(filters: &[(u32, u32)], module: usize) -> Filter {
+    let Filter::Rules(mut rules) = firmware_filter(filters) else {
+        return firmware_filter(filters);
+    };
+    let (id, mask) = if module == 0 {
+        (
+            (63 << 23) | (u32::from(rtcan_core::service::UPDATE_REP_BASE) << 7),
+            (0x3F << 23) | (0xFFC0 << 7),
+        )
+    } else {
+        (
+            (63 << 23) | ((u32::from(rtcan_core::service::UPDATE_REQ_BASE) + module as u32) << 7),
+            (0x3F << 23) | (0xFFFF << 7),
+        )
+    };
+    rules.push((mask, id, 1));
+    Filter::Rules(rules)
 }
 
 /// The module table of the current sync master (the first live module of the master
@@ -300,6 +331,10 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
         battery_rx: 0,
         log_rx: 0,
         last_log: String::new(),
+        update: cfg
+            .update
+            .as_ref()
+            .map(|j| crate::update::UpdateBus::new(j, MODULES.len(), robot::FINGERPRINT)),
     }))
 }
 
@@ -365,6 +400,7 @@ pub(crate) fn build_bus(
                     reset: robot::$m::reset,
                 });
                 m.down = crate::fault::down_intervals(&faults, n)?;
+                m.index = n;
                 m.babble_from = crate::fault::babble_from(&faults, n);
                 Box::new(m)
             }};
@@ -420,7 +456,10 @@ pub(crate) fn build_bus(
                 clock,
                 irq_latency_ns: cfg.sim.node_irq_latency_ns(),
                 nart: false,
-                filter: firmware_filter(filters),
+                filter: match cfg.update {
+                    Some(_) => update_filter(filters, n),
+                    None => firmware_filter(filters),
+                },
                 cpu: cfg.sim.cpu.clone(),
             },
         );
@@ -607,6 +646,13 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         ),
         modules,
         supervision,
+        update: sh.update.as_ref().map(|u| u.results()).unwrap_or_default(),
+        booted: (0..MODULES.len())
+            .map(|m| sh.update.as_ref().and_then(|u| u.booted(m)))
+            .collect(),
+        update_cuts: (0..MODULES.len())
+            .map(|m| sh.update.as_ref().map(|u| u.cuts(m)).unwrap_or_default())
+            .collect(),
         syncs,
         slots_live: live.map_or((0, 0), |c| (c.bad, c.checked)),
         config: cfg.clone(),

@@ -47,6 +47,9 @@ pub struct TestHost {
     /// the block the engine just released), overwriting its payload.
     pub reuse_hrt_tokens: bool,
     pub hrt_tokens: Vec<Option<Token>>,
+    /// Update-channel frames to send (front first) and the ones received.
+    pub service_out: std::collections::VecDeque<Frame>,
+    pub service_in: Vec<Frame>,
 }
 
 impl TestHost {
@@ -89,6 +92,15 @@ impl Host for TestHost {
     }
     fn event(&mut self, event: Event) {
         self.events.push(event);
+    }
+    fn service_rx(&mut self, frame: &Frame, _sof: Nanos) {
+        self.service_in.push(*frame);
+    }
+    fn service_tx(&mut self) -> Option<Frame> {
+        self.service_out.front().copied()
+    }
+    fn service_sent(&mut self) {
+        self.service_out.pop_front();
     }
 }
 

@@ -34,6 +34,8 @@ pub struct Shared {
     pub log_rx: u32,
     /// Last log line text received by the gateway.
     pub last_log: String,
+    /// A firmware update over the bus, if the run has one.
+    pub update: Option<crate::update::UpdateBus>,
 }
 
 /// What the host (ROS) sends through the gateway.
@@ -278,6 +280,8 @@ pub struct Boot<const RX: usize, const AR: usize, const Q: usize> {
 /// A simulated module, generic over the engine sizes the generated code chose.
 pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     pub name: &'static str,
+    /// Bus index (= the generated module index).
+    pub index: usize,
     pub engine: Box<Engine<'static, RX, AR, Q>>,
     pub host: ModuleHost<'static>,
     pub app: App,
@@ -322,6 +326,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         let srt_log = srt.iter().map(|&(tx, _)| (tx, SrtLog::default())).collect();
         SimModule {
             name,
+            index: 0,
             engine: Box::new(engine),
             host,
             app,
@@ -397,6 +402,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         self.app = (boot.app)();
         self.was_ok = false;
         self.reboots += 1;
+        if let Some(u) = self.shared.borrow_mut().update.as_mut() {
+            u.power_on(self.index);
+        }
         // The topics' counters start again from zero; what was pending died with it.
         for (tx, _, seen) in self.srt.iter_mut() {
             *seen = TopicStats::default();
@@ -404,6 +412,39 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 log.power_lost();
             }
         }
+    }
+
+    /// An engine call with the module's host and its side of the update channel (if
+    /// the run has one); a power cut the update hit takes the module down from now.
+    fn engine_call<R>(
+        &mut self,
+        now: Nanos,
+        can: &mut SimController,
+        f: impl FnOnce(
+            &mut Engine<'static, RX, AR, Q>,
+            &mut SimController,
+            &mut crate::update::WithUpdate<'_>,
+        ) -> R,
+    ) -> R {
+        let g = self.clock.global_at(now);
+        let shared = self.shared.clone();
+        let mut sh = shared.borrow_mut();
+        let mut h = crate::update::WithUpdate {
+            host: &mut self.host,
+            bus: sh.update.as_mut(),
+            module: self.index,
+            now: g,
+            cut: None,
+        };
+        let r = f(&mut self.engine, can, &mut h);
+        let cut = h.cut;
+        drop(sh);
+        if let Some(d) = cut {
+            // Down from now: the next event finds the power off (`alive`).
+            let at = self.next_down.min(self.down.len());
+            self.down.insert(at, (g, g.saturating_add(d)));
+        }
+        r
     }
 
     fn motor_index(&self) -> usize {
@@ -452,7 +493,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             self.first_trip_at.get_or_insert(global);
         }
         self.host.pump(&mut self.engine, now, can);
-        let e = self.engine.poll(now, can, &mut self.host);
+        let e = self.engine_call(now, can, |e, can, h| e.poll(now, can, h));
         // A slot handler may have freed queue room.
         self.host.pump(&mut self.engine, now, can);
         Some(if e == Nanos::MAX {
@@ -482,7 +523,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
         if let Err(wake) = self.alive(now, can) {
             return wake;
         }
-        self.engine.on_rx(frame, sof, can, &mut self.host);
+        self.engine_call(now, can, |e, can, h| e.on_rx(frame, sof, can, h));
         self.run(now, can)
     }
 
@@ -496,8 +537,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
         if let Err(wake) = self.alive(now, can) {
             return wake;
         }
-        self.engine
-            .on_tx_done(mailbox, result, now, can, &mut self.host);
+        self.engine_call(now, can, |e, can, h| {
+            e.on_tx_done(mailbox, result, now, can, h)
+        });
         self.run(now, can)
     }
 
@@ -516,7 +558,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
         if let Err(wake) = self.alive(now, can) {
             return wake;
         }
-        self.engine.on_error_state(now, state, can, &mut self.host);
+        self.engine_call(now, can, |e, can, h| e.on_error_state(now, state, can, h));
         self.run(now, can)
     }
 }
