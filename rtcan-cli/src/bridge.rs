@@ -144,7 +144,18 @@ fn bridge(
     // What robot.toml marks writable, on a link that can send (a replay cannot).
     opts.writable = match la.source() {
         Source::Sim(_) | Source::Serial(_) => plan.bridge.writable(),
-        _ => Vec::new(),
+        // A CAN adapter sends NRT topics only (rtcan_host::can).
+        Source::Can(_) => plan
+            .bridge
+            .writable()
+            .into_iter()
+            .filter(|w| {
+                cat.topics
+                    .iter()
+                    .any(|t| &t.name == w && t.class == rtcan_core::Class::Nrt)
+            })
+            .collect(),
+        Source::Replay(_) => Vec::new(),
     };
     // WAN of CANs: topics robot.toml takes from other robots' bridges.
     if !opts.writable.is_empty() && ros2.is_none() {

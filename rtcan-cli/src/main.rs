@@ -37,24 +37,63 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Validate, admit and plan a robot; print the plan (exit 0 admissible, 1 not
-    /// admissible, 2 invalid input, 3 undecided)
+    /// Validate, admit and plan a robot; print the plan
+    ///
+    /// The plan for a person, or JSON with --json (docs/ROBOT_TOML.md). Exit 0
+    /// admissible, 1 not admissible, 2 invalid input, 3 undecided (admission search
+    /// budget exhausted).
     Check(check::Args),
     /// Simulate the robot on a bit-accurate bus (docs/SIM.md)
+    ///
+    /// The workspace robot runs triskar2, any other robot its generic traffic scenario.
+    /// --emulate runs the Triskar2 release images on emulated STM32F103s instead
+    /// (options --seconds, --seed, --cpi, --json, --images; docs/EMULATOR.md);
+    /// --campaign runs the fault campaign on triskar2 and rtcan-paper, N s per case
+    /// (default 10).
     Sim(Box<sim::Args>),
     /// candump log -> topic-level messages
+    ///
+    /// Remote, error and CAN FD frames are skipped and counted; malformed lines are
+    /// reported (first 10) and counted. Exit 0 when every line parsed, 1 otherwise, 2 on
+    /// usage errors.
     Decode(decode::Args),
     /// Print a topic's messages as they arrive
+    ///
+    /// One line per message, or with --json one object per line:
+    /// {"time":SECONDS,"topic":NAME,"value":{FIELDS}}.
     Echo(echo::Args),
     /// Publish a value from the host
+    ///
+    /// JSON is an object with every field of TOPIC's type, e.g.
+    /// rtcan pub teleop '{"vx":0.3,"vy":0,"wz":0}'; a value that does not fit its
+    /// field's type is refused (exit 2). Then watches the bus for --seconds (default 1)
+    /// and says how many messages carried the value.
     Pub(pub_::Args),
     /// Write the bus to a candump log
+    ///
+    /// Every frame of the bus to FILE (`-`: standard output) in `candump -l` format,
+    /// simulated frames stamped from a real epoch; --count counts frames here.
     Record(record::Args),
     /// Modules, topics and bus load of a running bus
+    ///
+    /// On a terminal, a live screen redrawn every --every seconds until q, Esc or
+    /// Ctrl-C (into a pipe, the plain table); --once runs the bus for --seconds (default
+    /// 2) and prints the table once, --once --screen the screen as text.
     Monitor(monitor::Args),
     /// Every topic on Zenoh under rtcan/<robot>/<topic> (docs/BRIDGE.md)
+    ///
+    /// Runs until --seconds or Ctrl-C, then prints what it did. Every message is put on
+    /// rtcan/<robot>/<topic> (JSON objects; --raw: the little-endian payload); samples
+    /// on the topics robot.toml marks writable are published on the bus, others refused
+    /// and counted. <robot> is --robot-name or robot.toml's `[robot] name` (default: its
+    /// file stem). --ros2: the topics robot.toml maps to ROS 2 types as rmw_zenoh puts
+    /// them (node /<robot>/rtcan_bridge, CDR, liveliness tokens), through a Zenoh router
+    /// (--connect, default tcp/127.0.0.1:7447).
     Bridge(bridge::Args),
     /// Module parameters, range-checked by the module (docs/SERVICES.md)
+    ///
+    /// Every module's parameter server runs in this process on the simulated robot
+    /// (--sim); exit 1 when a module refuses a value.
     Param(param::Args),
 }
 
