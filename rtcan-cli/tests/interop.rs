@@ -256,3 +256,49 @@ fn sim_log_epoch_moves_the_log_and_only_the_log() {
     let (code, _, err) = rtcan(&["sim", "--log-epoch", "1"]);
     assert_eq!(code, 2, "--log-epoch needs --out: {err}");
 }
+
+/// `rtcan monitor --once --screen`: the live screen, drawn on ratatui's test backend, as
+/// text (what CI sees of the live view).
+#[test]
+fn monitor_screen_shows_the_live_view_as_text() {
+    let (code, out, err) = rtcan(&[
+        "monitor",
+        "--once",
+        "--screen",
+        "--seconds",
+        "1",
+        "--speed",
+        "0",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(
+        lines[0].starts_with("--sim robot.toml  bus time 0.9"),
+        "{}",
+        lines[0]
+    );
+    assert!(lines[1].starts_with("┌modules─"), "{out}");
+    assert_eq!(
+        lines[2].trim_end_matches([' ', '│']),
+        "│MODULE       #   HB AGE ms  STATE  FINGERPRINT  MATCH"
+    );
+    // Six modules, each with this robot's fingerprint.
+    for (k, m) in ["gateway", "motor1", "motor2", "motor3", "proximity", "psu"]
+        .iter()
+        .enumerate()
+    {
+        let row = lines[3 + k].trim_end_matches([' ', '│']);
+        assert!(row.starts_with(&format!("│{m:<12} {k}")), "{row}");
+        assert!(row.ends_with("0xc0636873   yes"), "{row}");
+    }
+    let wheel = lines
+        .iter()
+        .find(|l| l.starts_with("│wheel_setpoints  HRT "))
+        .unwrap();
+    assert!(wheel.contains("  100.0 "), "{wheel}");
+    assert!(out.contains("┌bus load─"), "{out}");
+    assert!(out.contains("total "), "{out}");
+    // Without --once there is no --screen.
+    let (code, _, _) = rtcan(&["monitor", "--screen"]);
+    assert_eq!(code, 2);
+}
