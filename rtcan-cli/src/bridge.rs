@@ -5,7 +5,7 @@ use rtcan_bridge::ros2::Ros2Bridge;
 use rtcan_bridge::{key, open_session, Bridge, Counts, Options};
 use rtcan_host::Source;
 
-use crate::link_args::{LinkArgs, HELP};
+use crate::link_args::LinkArgs;
 
 /// Set by SIGINT/SIGTERM: the bridge stops at the next step and prints its report.
 static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
@@ -23,67 +23,53 @@ fn stop_on_signals() {
     }
 }
 
-fn usage() -> String {
-    format!(
-        "usage: rtcan bridge [--listen ENDPOINT]... [--connect ENDPOINT]... [--robot-name NAME]\n\
-         \x20                   [--raw | --ros2 [--domain-id N]] [bus options] [--seconds S]\n\n\
-         runs until --seconds or Ctrl-C (then prints what it did);\n\
-         puts every message on Zenoh key rtcan/<robot>/<topic> (JSON objects; --raw: the\n\
-         little-endian payload); samples other Zenoh nodes put on rtcan/<robot>/teleop are\n\
-         published on the bus, samples on other topics are refused and counted.\n\
-         <robot> is --robot-name or robot.toml's `[robot] name` (default: its file stem).\n\
-         ENDPOINT: e.g. tcp/127.0.0.1:7447\n\n\
-         --ros2: the topics robot.toml maps to ROS 2 types (`ros2 = ...`) as rmw_zenoh\n\
-         puts them (node /<robot>/rtcan_bridge, CDR, liveliness tokens), joining ROS 2\n\
-         through a Zenoh router (--connect, default tcp/127.0.0.1:7447); writable\n\
-         topics are taken from ROS 2. --domain-id: ROS_DOMAIN_ID (default: that\n\
-         variable, else 0).\n\n{HELP}"
-    )
+/// `rtcan bridge`: runs until --seconds or Ctrl-C (then prints what it did); puts every
+/// message on Zenoh key rtcan/<robot>/<topic> (JSON objects; --raw: the little-endian
+/// payload); samples other Zenoh nodes put on the topics robot.toml marks writable are
+/// published on the bus, samples on other topics are refused and counted. <robot> is
+/// --robot-name or robot.toml's `[robot] name` (default: its file stem).
+///
+/// --ros2: the topics robot.toml maps to ROS 2 types (`ros2 = ...`) as rmw_zenoh puts
+/// them (node /<robot>/rtcan_bridge, CDR, liveliness tokens), joining ROS 2 through a
+/// Zenoh router (--connect, default tcp/127.0.0.1:7447); writable topics are taken from
+/// ROS 2.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Zenoh endpoint to listen on, e.g. tcp/127.0.0.1:7447 (repeatable)
+    #[arg(long, value_name = "ENDPOINT")]
+    listen: Vec<String>,
+    /// Zenoh endpoint to connect to (repeatable)
+    #[arg(long, value_name = "ENDPOINT")]
+    connect: Vec<String>,
+    /// The <robot> of the key expressions
+    #[arg(long, value_name = "NAME")]
+    robot_name: Option<String>,
+    /// Payloads as raw little-endian bytes instead of JSON
+    #[arg(long)]
+    raw: bool,
+    /// Speak rmw_zenoh (ROS 2) for the topics robot.toml maps
+    #[arg(long)]
+    ros2: bool,
+    /// ROS_DOMAIN_ID with --ros2 (default: that variable, else 0)
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    domain_id: Option<String>,
+    #[command(flatten)]
+    la: LinkArgs,
 }
 
 /// Runs `rtcan bridge`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut la = LinkArgs::default();
-    let mut opts = Options::default();
-    let mut name = None;
-    let mut ros2 = false;
-    let mut domain: Option<String> = None;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match la.take(a, &mut it) {
-            Err(e) => return crate::usage_error(&e, &usage()),
-            Ok(true) => continue,
-            Ok(false) => {}
-        }
-        let mut val = |flag: &str| it.next().cloned().ok_or(format!("{flag} needs a value"));
-        let r = match a.as_str() {
-            "-h" | "--help" => {
-                println!("{}", usage());
-                return 0;
-            }
-            "--listen" => val(a).map(|v| opts.listen.push(v)),
-            "--connect" => val(a).map(|v| opts.connect.push(v)),
-            "--robot-name" => val(a).map(|v| name = Some(v)),
-            "--raw" => {
-                opts.raw = true;
-                Ok(())
-            }
-            "--ros2" => {
-                ros2 = true;
-                Ok(())
-            }
-            "--domain-id" => val(a).map(|v| domain = Some(v)),
-            s => Err(format!("unexpected `{s}`")),
-        };
-        if let Err(e) = r {
-            return crate::usage_error(&e, &usage());
-        }
-    }
-    let domain = match ros2_domain(ros2, opts.raw, domain) {
-        Ok(d) => d,
-        Err(e) => return crate::usage_error(&e, &usage()),
+pub fn run(a: Args) -> i32 {
+    let opts = Options {
+        listen: a.listen,
+        connect: a.connect,
+        raw: a.raw,
+        ..Options::default()
     };
-    match bridge(&la, opts, name, domain) {
+    let domain = match ros2_domain(a.ros2, opts.raw, a.domain_id) {
+        Ok(d) => d,
+        Err(e) => return crate::usage_error("bridge", &e),
+    };
+    match bridge(&a.la, opts, a.robot_name, domain) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -156,9 +142,20 @@ fn bridge(
         ));
     }
     // What robot.toml marks writable, on a link that can send (a replay cannot).
-    opts.writable = match la.source {
+    opts.writable = match la.source() {
         Source::Sim(_) | Source::Serial(_) => plan.bridge.writable(),
-        _ => Vec::new(),
+        // A CAN adapter sends NRT topics only (rtcan_host::can).
+        Source::Can(_) => plan
+            .bridge
+            .writable()
+            .into_iter()
+            .filter(|w| {
+                cat.topics
+                    .iter()
+                    .any(|t| &t.name == w && t.class == rtcan_core::Class::Nrt)
+            })
+            .collect(),
+        Source::Replay(_) => Vec::new(),
     };
     // WAN of CANs: topics robot.toml takes from other robots' bridges.
     if !opts.writable.is_empty() && ros2.is_none() {

@@ -5,43 +5,31 @@ use crate::out;
 use rtcan_model::{compat, lock, read_analysis, report, Robot, Status};
 use std::path::Path;
 
+/// `rtcan check`: the plan for a person, or JSON (docs/ROBOT_TOML.md).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The robot
+    #[arg(value_name = "robot.toml")]
+    path: String,
+    /// The analysis as JSON (plan, diagnostics, field layouts of every topic)
+    #[arg(long)]
+    json: bool,
+    /// Also list the modules whose image changes from this older robot.toml
+    #[arg(long, value_name = "old.toml")]
+    against: Option<String>,
+    /// Write robot.lock with this plan's allocation
+    #[arg(long)]
+    update_lock: bool,
+    /// Write the bus as a DBC file (cantools, SavvyCAN): the single-frame HRT and NRT
+    /// topics and the heartbeats, the messages whose CAN identifier is fixed
+    #[arg(long, value_name = "FILE")]
+    dbc: Option<String>,
+}
+
 /// Exit code: 0 admissible, 1 not admissible, 2 invalid input or usage, 3 undecided.
-pub fn run(args: &[String]) -> i32 {
-    let mut json = false;
-    let mut path: Option<&str> = None;
-    let mut against: Option<&str> = None;
-    let mut update_lock = false;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--json" => json = true,
-            "--update-lock" => update_lock = true,
-            "--against" => match it.next() {
-                Some(old) => against = Some(old),
-                None => {
-                    eprintln!("error: `--against` needs the old robot.toml");
-                    return 2;
-                }
-            },
-            "-h" | "--help" => {
-                println!("usage: rtcan check <robot.toml> [--json] [--against <old.toml>] [--update-lock]");
-                return 0;
-            }
-            s if s.starts_with('-') => {
-                eprintln!("error: unknown option `{s}` (usage: rtcan check <robot.toml> [--json] [--against <old.toml>] [--update-lock])");
-                return 2;
-            }
-            s if path.is_none() => path = Some(s),
-            s => {
-                eprintln!("error: unexpected argument `{s}` (one robot.toml at a time)");
-                return 2;
-            }
-        }
-    }
-    let Some(path) = path else {
-        eprintln!("error: missing robot.toml (usage: rtcan check <robot.toml> [--json] [--against <old.toml>] [--update-lock])");
-        return 2;
-    };
+pub fn run(a: Args) -> i32 {
+    let (path, json, update_lock) = (a.path.as_str(), a.json, a.update_lock);
+    let against = a.against.as_deref();
     let analysis = read_analysis(Path::new(path), path);
     let status = analysis.status();
     // A reader that stops early (`| head -1`) ends the output, not the command.
@@ -72,8 +60,16 @@ pub fn run(args: &[String]) -> i32 {
         }
         eprintln!("wrote {}", lp.display());
     }
+    if let (Some(file), Some(plan)) = (&a.dbc, &analysis.plan) {
+        if let Err(e) = std::fs::write(file, rtcan_host::dbc::dbc(plan)) {
+            eprintln!("error: cannot write `{file}`: {e}");
+            return 2;
+        }
+        eprintln!("wrote {file}");
+    }
     if json {
-        out::println(&compat::json_text(&analysis, changes.as_deref()));
+        let text = compat::json_text(&analysis, changes.as_deref());
+        out::println(&with_layouts(text, analysis.plan.as_ref()));
     } else if let Some(plan) = &analysis.plan {
         out::print(&report::text(plan));
         for c in &plan.chains {
@@ -119,4 +115,50 @@ fn load_old(old: &str, new: &str) -> Result<rtcan_model::Plan, rtcan_model::Diag
         Some(p) if a.diagnostics.is_empty() => Ok(p),
         _ => Err(a.diagnostics),
     }
+}
+
+/// The check's JSON with each topic's field layout added as `fields`: name, type, byte
+/// offset, bytes, and `len` for arrays (the layout tools such as SavvyCAN need to decode
+/// every topic, including those a DBC cannot hold).
+fn with_layouts(text: String, plan: Option<&rtcan_model::Plan>) -> String {
+    let Some(plan) = plan else { return text };
+    let Ok(mut v) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return text;
+    };
+    let Some(topics) = v.get_mut("topics").and_then(|t| t.as_array_mut()) else {
+        return text;
+    };
+    for t in topics.iter_mut() {
+        let Some(obj) = t.as_object_mut() else {
+            continue;
+        };
+        let name = obj.get("name").and_then(|n| n.as_str()).unwrap_or("");
+        let Some(tp) = plan.topics.iter().find(|p| p.name == name) else {
+            continue;
+        };
+        let fields: Vec<serde_json::Value> = plan
+            .types
+            .get(tp.ty)
+            .map(|ty| {
+                ty.fields
+                    .iter()
+                    .map(|f| {
+                        let n = f.ty.len.map_or(1, usize::from);
+                        let mut o = serde_json::json!({
+                            "name": f.name,
+                            "type": f.ty.prim.name(),
+                            "offset": f.offset,
+                            "bytes": f.ty.prim.size() * n,
+                        });
+                        if let (Some(len), Some(m)) = (f.ty.len, o.as_object_mut()) {
+                            m.insert("len".into(), len.into());
+                        }
+                        o
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        obj.insert("fields".into(), fields.into());
+    }
+    serde_json::to_string_pretty(&v).unwrap_or(text)
 }

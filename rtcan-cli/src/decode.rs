@@ -1,23 +1,11 @@
 //! `rtcan decode <log|-> --robot robot.toml`: candump log → topic-level messages, line by
 //! line (a record is printed as soon as its last frame is read; memory does not grow
 //! with the log).
-use std::io::{BufRead, Read as _, Write as _};
+use std::io::{BufRead, Read as _};
 
 use rtcan_sim::candump::{classify, Line};
 use rtcan_sim::decode::{plan_catalog, render, scenario_catalog, Catalog, Decoder};
 use rtcan_sim::paper;
-
-const USAGE: &str =
-    "usage: rtcan decode <candump.log | -> (--robot robot.toml | --scenario rtcan-paper) [--force]
-
-  <candump.log>      a `candump -l` log; `-` reads standard input
-  --robot FILE       the robot the log was recorded on (topics, types, fingerprint)
-  --scenario NAME    a built-in scenario's catalog (rtcan-paper)
-  --force            decode messages of senders whose heartbeat carries another robot's
-                     fingerprint too (marked FOREIGN SENDER); by default they are refused
-
-remote, error and CAN FD frames are skipped and counted; malformed lines are reported
-(first 10) and counted; exit 0 when every line parsed, 1 otherwise, 2 on usage errors";
 
 /// Malformed lines reported one by one; the rest only counted.
 const REPORTED_BAD_LINES: u64 = 10;
@@ -26,38 +14,25 @@ const REPORTED_BAD_LINES: u64 = 10;
 /// into malformed pieces of this size).
 const MAX_LINE: u64 = 4096;
 
-struct Args {
+/// `rtcan decode`: remote, error and CAN FD frames are skipped and counted; malformed
+/// lines are reported (first 10) and counted; exit 0 when every line parsed, 1
+/// otherwise, 2 on usage errors.
+#[derive(clap::Args, Debug)]
+#[command(group = clap::ArgGroup::new("catalog").required(true).args(["robot", "scenario"]))]
+pub struct Args {
+    /// A `candump -l` log; `-` reads standard input
+    #[arg(value_name = "candump.log | -", allow_hyphen_values = true)]
     log: String,
+    /// The robot the log was recorded on (topics, types, fingerprint)
+    #[arg(long, value_name = "FILE")]
     robot: Option<String>,
+    /// A built-in scenario's catalog (rtcan-paper)
+    #[arg(long, value_name = "NAME")]
     scenario: Option<String>,
+    /// Decode messages of senders whose heartbeat carries another robot's fingerprint
+    /// too (marked FOREIGN SENDER); by default they are refused
+    #[arg(long)]
     force: bool,
-}
-
-fn parse(args: &[String]) -> Result<Option<Args>, String> {
-    let (mut log, mut robot, mut scenario, mut force) = (None, None, None, false);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--robot" => robot = Some(it.next().cloned().ok_or("--robot needs a file")?),
-            "--scenario" => scenario = Some(it.next().cloned().ok_or("--scenario needs a name")?),
-            "--force" => force = true,
-            s if s.starts_with('-') && s != "-" => return Err(format!("unknown option `{s}`")),
-            s => {
-                if let Some(first) = &log {
-                    return Err(format!("two logs, `{first}` and `{s}`: give one"));
-                }
-                log = Some(s.to_string());
-            }
-        }
-    }
-    let log = log.ok_or("no log file (`-` reads standard input)")?;
-    Ok(Some(Args {
-        log,
-        robot,
-        scenario,
-        force,
-    }))
 }
 
 fn catalog(a: &Args) -> Result<Catalog, String> {
@@ -77,18 +52,7 @@ fn catalog(a: &Args) -> Result<Catalog, String> {
 }
 
 /// Runs `rtcan decode`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let a = match parse(args) {
-        Ok(Some(a)) => a,
-        Ok(None) => {
-            let _ = writeln!(std::io::stdout(), "{USAGE}");
-            return 0;
-        }
-        Err(e) => {
-            eprintln!("error: {e}\n{USAGE}");
-            return 2;
-        }
-    };
+pub fn run(a: Args) -> i32 {
     let cat = match catalog(&a) {
         Ok(c) => c,
         Err(e) => {

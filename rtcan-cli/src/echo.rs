@@ -4,44 +4,24 @@ use std::io::Write as _;
 use rtcan_host::value::to_json;
 use rtcan_sim::decode::{render, Decoded, Decoder};
 
-use crate::link_args::{entry, LinkArgs, HELP};
+use crate::link_args::{entry, LinkArgs};
 
-fn usage() -> String {
-    format!(
-        "usage: rtcan echo TOPIC [--json] [bus options] [--seconds S] [--count N]\n\n\
-         prints each message of TOPIC (one line, or one JSON object per line with --json:\n\
-         {{\"time\":SECONDS,\"topic\":NAME,\"value\":{{FIELDS}}}})\n\n{HELP}"
-    )
+/// `rtcan echo`: prints each message of TOPIC (one line, or with --json one object per
+/// line: {"time":SECONDS,"topic":NAME,"value":{FIELDS}}).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The topic, by its robot.toml name
+    topic: String,
+    /// One JSON object per message
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    la: LinkArgs,
 }
 
 /// Runs `rtcan echo`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut la = LinkArgs::default();
-    let (mut topic, mut json) = (None, false);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match la.take(a, &mut it) {
-            Err(e) => return crate::usage_error(&e, &usage()),
-            Ok(true) => continue,
-            Ok(false) => {}
-        }
-        match a.as_str() {
-            "-h" | "--help" => {
-                println!("{}", usage());
-                return 0;
-            }
-            "--json" => json = true,
-            s if s.starts_with('-') => {
-                return crate::usage_error(&format!("unknown option `{s}`"), &usage())
-            }
-            s if topic.is_none() => topic = Some(s.to_string()),
-            s => return crate::usage_error(&format!("one topic only (`{s}`)"), &usage()),
-        }
-    }
-    let Some(topic) = topic else {
-        return crate::usage_error("no topic given", &usage());
-    };
-    match echo(&la, &topic, json) {
+pub fn run(a: Args) -> i32 {
+    match echo(&a.la, &a.topic, a.json) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");

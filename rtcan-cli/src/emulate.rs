@@ -5,44 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Whether `args` ask for the emulator.
-pub fn wanted(args: &[String]) -> bool {
-    args.iter().any(|a| a == "--emulate")
-}
-
-/// Runs `rtcan-emu` with the options that apply to it; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut forward = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--emulate" => {}
-            "--json" => forward.push(a.clone()),
-            "--seconds" | "--images" | "--seed" | "--cpi" => {
-                let Some(v) = it.next() else {
-                    eprintln!("error: {a} needs a value");
-                    return 2;
-                };
-                forward.push(a.clone());
-                forward.push(v.clone());
-            }
-            s if s.starts_with('-') => {
-                eprintln!("error: `{s}` does not apply with --emulate (options: --seconds, --seed, --cpi, --json, --images)");
-                return 2;
-            }
-            robot => {
-                // The images are built from the workspace robot: another file cannot run.
-                if !same_file(Path::new(robot), Path::new("robot.toml")) {
-                    eprintln!(
-                        "error: --emulate runs the images of the workspace robot (./robot.toml), not `{robot}`"
-                    );
-                    return 2;
-                }
-            }
-        }
-    }
+/// Runs `rtcan-emu` with `forward`, the options that apply to it (checked by
+/// `sim::emulate_args`); returns the exit code.
+pub fn run(forward: &[String]) -> i32 {
     let exe = emulator();
-    match Command::new(&exe).args(&forward).status() {
+    match Command::new(&exe).args(forward).status() {
         Ok(s) => s.code().unwrap_or(1),
         Err(e) => {
             eprintln!(
@@ -54,7 +21,7 @@ pub fn run(args: &[String]) -> i32 {
     }
 }
 
-fn same_file(a: &Path, b: &Path) -> bool {
+pub fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(x), Ok(y)) => x == y,
         _ => false,

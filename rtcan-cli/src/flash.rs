@@ -12,79 +12,42 @@ use rtcan_sim::update::{crc, test_image, Target, UpdateJob};
 
 use crate::out;
 
-const USAGE: &str = "\
-usage: rtcan flash [robot.toml] [--sim robot.toml] (--module M | --all) [--image FILE]
-                   [--seconds S] [--json]
-  --module M      the module to update (repeatable); --all: every module on the bus
-                  (not the gateway: it is updated over its host link)
-  --image FILE    the image to send (raw flash bytes, the robot fingerprint at offset
-                  0x1D0); default: a deterministic 28 KiB test image
-  --seconds S     simulated time per module before giving up (default 10: the budget)
-  --json          one JSON object per module: module, bytes, bus_time_ms, frames,
-                  retries, ok
-exit: 0 every update committed, 1 one failed, 2 bad input";
-
 /// When the host starts sending (the robot has synchronised by then).
 const START_NS: u64 = 500_000_000;
 
-struct Args {
-    robot: PathBuf,
-    modules: Vec<String>,
+/// `rtcan flash`: firmware update over the bus, simulated robot.
+#[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("which").required(true).args(["module", "all"])))]
+pub struct Args {
+    /// The robot (same as --sim)
+    #[arg(value_name = "robot.toml")]
+    robot: Option<PathBuf>,
+    /// The simulated robot (the default bus)
+    #[arg(long, value_name = "robot.toml", conflicts_with = "robot")]
+    sim: Option<PathBuf>,
+    /// The module to update (repeatable)
+    #[arg(long, value_name = "M")]
+    module: Vec<String>,
+    /// Every module on the bus (not the gateway: it is updated over its host link)
+    #[arg(long)]
     all: bool,
+    /// The image to send (raw flash bytes, the robot fingerprint at offset 0x1D0);
+    /// default: a deterministic 28 KiB test image
+    #[arg(long, value_name = "FILE")]
     image: Option<PathBuf>,
+    /// Simulated time per module before giving up (the budget)
+    #[arg(long, value_name = "S", default_value_t = 10.0, value_parser = crate::link_args::positive)]
     seconds: f64,
+    /// One JSON object per module: module, bytes, bus_time_ms, frames, retries, ok
+    #[arg(long)]
     json: bool,
-}
-
-fn parse(args: &[String]) -> Result<Option<Args>, String> {
-    let mut a = Args {
-        robot: PathBuf::from("robot.toml"),
-        modules: Vec::new(),
-        all: false,
-        image: None,
-        seconds: 10.0,
-        json: false,
-    };
-    let mut it = args.iter();
-    let mut positional = false;
-    while let Some(x) = it.next() {
-        let mut val = |flag: &str| {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("{flag} needs a value"))
-        };
-        match x.as_str() {
-            "--sim" => a.robot = val("--sim")?.into(),
-            "--module" => a.modules.push(val("--module")?),
-            "--all" => a.all = true,
-            "--image" => a.image = Some(val("--image")?.into()),
-            "--seconds" => {
-                let v = val("--seconds")?;
-                a.seconds = v
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|s| *s > 0.0 && s.is_finite())
-                    .ok_or_else(|| format!("--seconds `{v}`: give a number > 0"))?;
-            }
-            "--json" => a.json = true,
-            "--serial" | "--can" | "--replay" => {
-                return Err(format!(
-                    "{x}: `rtcan flash` runs against the simulator only so far (--sim)"
-                ))
-            }
-            "-h" | "--help" => return Ok(None),
-            s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
-            s if !positional => {
-                positional = true;
-                a.robot = s.into();
-            }
-            s => return Err(format!("unexpected argument `{s}`")),
-        }
-    }
-    if a.all != a.modules.is_empty() {
-        return Err("give --module M or --all".into());
-    }
-    Ok(Some(a))
+    /// The other buses of the host tools: refused with a reason (simulator only so far)
+    #[arg(long, hide = true, value_name = "BUS")]
+    serial: Option<String>,
+    #[arg(long, hide = true, value_name = "BUS")]
+    can: Option<String>,
+    #[arg(long, hide = true, value_name = "BUS")]
+    replay: Option<String>,
 }
 
 fn json_row(name: &str, r: &rtcan_sim::update::UpdateResult) -> String {
@@ -109,16 +72,25 @@ fn result_text(o: Option<Outcome>) -> String {
 }
 
 /// Exit code: 0 all committed, 1 a module refused or did not finish, 2 bad input.
-pub fn run(args: &[String]) -> i32 {
-    let a = match parse(args) {
-        Ok(Some(a)) => a,
-        Ok(None) => {
-            out::println(USAGE);
-            return 0;
+pub fn run(a: Args) -> i32 {
+    for (flag, given) in [
+        ("--serial", &a.serial),
+        ("--can", &a.can),
+        ("--replay", &a.replay),
+    ] {
+        if given.is_some() {
+            return crate::usage_error(
+                "flash",
+                &format!("{flag}: `rtcan flash` runs against the simulator only so far (--sim)"),
+            );
         }
-        Err(e) => return crate::usage_error(&e, USAGE),
-    };
-    let plan = match rtcan_model::Robot::load(&a.robot) {
+    }
+    let robot = a
+        .sim
+        .clone()
+        .or_else(|| a.robot.clone())
+        .unwrap_or_else(|| PathBuf::from("robot.toml"));
+    let plan = match rtcan_model::Robot::load(&robot) {
         Ok(p) => p,
         Err(d) => {
             out::eprint(&d.render());
@@ -133,7 +105,7 @@ pub fn run(args: &[String]) -> i32 {
         (1..MODULES.len()).collect()
     } else {
         let mut t = Vec::new();
-        for m in &a.modules {
+        for m in &a.module {
             match MODULES.iter().position(|x| x == m) {
                 Some(0) => {
                     eprintln!("error: the gateway is updated over its host link, not the bus");
@@ -213,7 +185,7 @@ pub fn run(args: &[String]) -> i32 {
     } else {
         let mut text = format!(
             "{} (fingerprint {fp:#010x}), simulated, {} bit/s; image: {what}, CRC-32 {:#010x}\n",
-            a.robot.display(),
+            robot.display(),
             plan.bus.bitrate,
             crc(&image)
         );

@@ -7,87 +7,73 @@ use std::path::PathBuf;
 use rtcan_host::{Link, Source};
 use rtcan_sim::decode::{plan_catalog, Catalog};
 
-pub const HELP: &str = "\
-bus (one of; default --sim robot.toml):
-  --sim ROBOT.toml   the simulated robot, in-process, paced to the wall clock
-  --replay LOG       a candump log (`-`: standard input)
-  --serial PORT      the gateway's serial link
-  --can IFACE        a SocketCAN interface
-  --robot ROBOT.toml the robot of --replay/--serial/--can (default robot.toml)
-  --speed X          pace simulated/replayed time at X times the wall clock
-                     (default 1; 0 = as fast as possible)
-limits:
-  --seconds S        stop after S seconds of bus time
-  --count N          stop after N messages";
-
-/// Parsed bus options.
+/// Parsed bus options, shared by `echo`, `pub`, `record`, `monitor` and `bridge`.
+#[derive(clap::Args, Debug)]
+#[command(next_help_heading = "Bus (one of; default --sim robot.toml)")]
 pub struct LinkArgs {
-    pub source: Source,
+    /// The simulated robot, in-process, paced to the wall clock
+    #[arg(long, value_name = "ROBOT.toml", group = "bus")]
+    sim: Option<PathBuf>,
+    /// A candump log (`-`: standard input)
+    #[arg(long, value_name = "LOG", group = "bus")]
+    replay: Option<PathBuf>,
+    /// The gateway's serial link
+    #[arg(long, value_name = "PORT", group = "bus")]
+    serial: Option<String>,
+    /// A SocketCAN interface (listen-only monitor, NRT sender)
+    #[arg(long, value_name = "IFACE", group = "bus")]
+    can: Option<String>,
+    /// The robot of --replay/--serial/--can (default robot.toml)
+    #[arg(long, value_name = "ROBOT.toml")]
     pub robot: Option<PathBuf>,
+    /// Pace simulated/replayed time at X times the wall clock (0 = as fast as possible)
+    #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = non_negative)]
     pub speed: f64,
+    /// Stop after S seconds of bus time
+    #[arg(long, value_name = "S", value_parser = non_negative)]
     pub seconds: Option<f64>,
+    /// Stop after N messages
+    #[arg(long, value_name = "N")]
     pub count: Option<u64>,
 }
 
-impl Default for LinkArgs {
-    fn default() -> Self {
-        LinkArgs {
-            source: Source::Sim(PathBuf::from("robot.toml")),
-            robot: None,
-            speed: 1.0,
-            seconds: None,
-            count: None,
-        }
+/// A finite number >= 0 (clap value parser).
+pub fn non_negative(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(s) if s >= 0.0 && s.is_finite() => Ok(s),
+        _ => Err(format!("`{v}`: give a finite number >= 0")),
     }
 }
 
-fn num<T: std::str::FromStr>(flag: &str, v: Option<&String>) -> Result<T, String> {
-    let v = v.ok_or_else(|| format!("{flag} needs a value"))?;
-    v.parse()
-        .map_err(|_| format!("{flag}: `{v}` is not a valid number"))
+/// A finite number > 0 (clap value parser).
+pub fn positive(v: &str) -> Result<f64, String> {
+    match v.parse::<f64>() {
+        Ok(s) if s > 0.0 && s.is_finite() => Ok(s),
+        _ => Err(format!("`{v}`: give a finite number > 0")),
+    }
 }
 
 impl LinkArgs {
-    /// Takes `a` (and its value from `it`) if it is a bus option: `Ok(true)`.
-    pub fn take<'a>(
-        &mut self,
-        a: &str,
-        it: &mut impl Iterator<Item = &'a String>,
-    ) -> Result<bool, String> {
-        let mut val = |flag: &str| {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("{flag} needs a value"))
-        };
-        match a {
-            "--sim" => self.source = Source::Sim(val(a)?.into()),
-            "--replay" => self.source = Source::Replay(val(a)?.into()),
-            "--serial" => self.source = Source::Serial(val(a)?),
-            "--can" => self.source = Source::Can(val(a)?),
-            "--robot" => self.robot = Some(val(a)?.into()),
-            "--speed" => {
-                let s: f64 = num(a, it.next())?;
-                if !(s >= 0.0 && s.is_finite()) {
-                    return Err(format!("--speed {s}: give a finite number >= 0"));
-                }
-                self.speed = s;
-            }
-            "--seconds" => {
-                let s: f64 = num(a, it.next())?;
-                if !(s >= 0.0 && s.is_finite()) {
-                    return Err(format!("--seconds {s}: give a finite number >= 0"));
-                }
-                self.seconds = Some(s);
-            }
-            "--count" => self.count = Some(num(a, it.next())?),
-            _ => return Ok(false),
+    /// Which bus the options name.
+    pub fn source(&self) -> Source {
+        if let Some(p) = &self.replay {
+            Source::Replay(p.clone())
+        } else if let Some(p) = &self.serial {
+            Source::Serial(p.clone())
+        } else if let Some(i) = &self.can {
+            Source::Can(i.clone())
+        } else {
+            Source::Sim(
+                self.sim
+                    .clone()
+                    .unwrap_or_else(|| PathBuf::from("robot.toml")),
+            )
         }
-        Ok(true)
     }
 
     /// The robot's plan and catalog.
     pub fn robot(&self) -> Result<(rtcan_model::Plan, Catalog), String> {
-        let path = match (&self.source, &self.robot) {
+        let path = match (&self.source(), &self.robot) {
             (Source::Sim(p), None) => p.clone(),
             (Source::Sim(_), Some(_)) => {
                 return Err("--robot is for --replay/--serial/--can; --sim names its robot".into())
@@ -101,7 +87,7 @@ impl LinkArgs {
 
     /// Opens the bus.
     pub fn open(&self, plan: &rtcan_model::Plan) -> Result<Box<dyn Link>, String> {
-        rtcan_host::open(&self.source, plan, self.speed)
+        rtcan_host::open(&self.source(), plan, self.speed)
     }
 
     /// Bus time (ns) at which the run ends, from the link's start.

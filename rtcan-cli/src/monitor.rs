@@ -1,50 +1,39 @@
-//! `rtcan monitor`: modules, topics and bus load of a running bus. Live, the table is
-//! redrawn in place every `--every` seconds of wall time; `--once` prints it once at the
-//! end of the run (`--seconds`, default 2), which is what scripts and CI use.
+//! `rtcan monitor`: modules, topics and bus load of a running bus. Live on a terminal,
+//! the ratatui screen (monitor_tui.rs) is redrawn every `--every` seconds of wall time
+//! until q, Esc or Ctrl-C (into a pipe, the plain table is); `--once` prints the table
+//! once at the end of the run (`--seconds`, default 2), `--once --screen` the screen as
+//! text: what scripts and CI use.
 use std::io::Write as _;
 use std::time::{Duration, Instant};
 
 use rtcan_host::monitor::Monitor;
 use rtcan_sim::decode::Decoder;
 
-use crate::link_args::{entry, LinkArgs, HELP};
+use crate::link_args::{entry, positive, LinkArgs};
 
-fn usage() -> String {
-    format!(
-        "usage: rtcan monitor [--once] [--every S] [bus options] [--seconds S]\n\n\
-         --once      run the bus for --seconds (default 2) and print the table once\n\
-         --every S   live: redraw every S wall-clock seconds (default 0.5) until stopped\n\n{HELP}"
-    )
+/// `rtcan monitor`: live, the table is redrawn every --every seconds until stopped;
+/// --once runs the bus for --seconds (default 2) and prints the table once.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Run the bus for --seconds (default 2) and print the table once
+    #[arg(long)]
+    once: bool,
+    /// With --once: print the live screen (as text) instead of the plain table
+    #[arg(long, requires = "once")]
+    screen: bool,
+    /// Live: redraw every S wall-clock seconds
+    #[arg(long, value_name = "S", default_value_t = 0.5, value_parser = positive)]
+    every: f64,
+    #[command(flatten)]
+    la: LinkArgs,
 }
 
 /// Runs `rtcan monitor`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut la = LinkArgs::default();
-    let (mut once, mut every) = (false, 0.5f64);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match la.take(a, &mut it) {
-            Err(e) => return crate::usage_error(&e, &usage()),
-            Ok(true) => continue,
-            Ok(false) => {}
-        }
-        match a.as_str() {
-            "-h" | "--help" => {
-                println!("{}", usage());
-                return 0;
-            }
-            "--once" => once = true,
-            "--every" => match it.next().map(|v| v.parse::<f64>()) {
-                Some(Ok(e)) if e > 0.0 && e.is_finite() => every = e,
-                _ => return crate::usage_error("--every needs seconds > 0", &usage()),
-            },
-            s => return crate::usage_error(&format!("unexpected `{s}`"), &usage()),
-        }
+pub fn run(mut a: Args) -> i32 {
+    if a.once && a.la.seconds.is_none() {
+        a.la.seconds = Some(2.0);
     }
-    if once && la.seconds.is_none() {
-        la.seconds = Some(2.0);
-    }
-    match monitor(&la, once, Duration::from_secs_f64(every)) {
+    match monitor(&a.la, a.once, a.screen, Duration::from_secs_f64(a.every)) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -53,7 +42,18 @@ pub fn run(args: &[String]) -> i32 {
     }
 }
 
-fn monitor(la: &LinkArgs, once: bool, every: Duration) -> Result<(), String> {
+/// The bus's name on the screen's first line.
+fn title(la: &LinkArgs) -> String {
+    match la.source() {
+        rtcan_host::Source::Sim(p) => format!("--sim {}", p.display()),
+        rtcan_host::Source::Replay(p) => format!("--replay {}", p.display()),
+        rtcan_host::Source::Serial(p) => format!("--serial {p}"),
+        rtcan_host::Source::Can(i) => format!("--can {i}"),
+    }
+}
+
+fn monitor(la: &LinkArgs, once: bool, screen: bool, every: Duration) -> Result<(), String> {
+    let title = title(la);
     let (plan, cat) = la.robot()?;
     let names = plan.modules.iter().map(|m| m.name.clone()).collect();
     let mut mon = Monitor::new(&cat, names, plan.bus.bitrate);
@@ -62,6 +62,11 @@ fn monitor(la: &LinkArgs, once: bool, every: Duration) -> Result<(), String> {
     let mut dec = Decoder::new(&cat);
     let mut last_draw = Instant::now();
     let mut messages = 0u64;
+    let mut live = if once {
+        None
+    } else {
+        crate::monitor_tui::Live::start()
+    };
     'run: while link.now_ns() < end {
         let Some(batch) = link.recv()? else { break };
         for s in batch {
@@ -74,13 +79,32 @@ fn monitor(la: &LinkArgs, once: bool, every: Duration) -> Result<(), String> {
                 mon.record(&d, s.time_ns);
             }
         }
+        if let Some(l) = live.as_mut() {
+            if l.quit_asked() {
+                break;
+            }
+        }
         if !once && last_draw.elapsed() >= every {
             last_draw = Instant::now();
-            // Home the cursor and clear: the table redraws in place.
-            print!("\x1b[H\x1b[2J{}", mon.render(&cat));
-            let _ = std::io::stdout().flush();
+            match live.as_mut() {
+                Some(l) => l.draw(&mon.view(&cat), &title)?,
+                None => {
+                    // Not a terminal: the plain table, homed and cleared.
+                    print!("\x1b[H\x1b[2J{}", mon.render(&cat));
+                    let _ = std::io::stdout().flush();
+                }
+            }
         }
     }
-    print!("{}", mon.render(&cat));
+    // Leave the alternate screen before the final table.
+    drop(live);
+    if screen {
+        print!(
+            "{}",
+            crate::monitor_tui::screen_text(&mon.view(&cat), &title, 120)?
+        );
+    } else {
+        print!("{}", mon.render(&cat));
+    }
     Ok(())
 }

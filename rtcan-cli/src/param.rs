@@ -8,8 +8,6 @@ use rtcan_model::read_source;
 use rtcan_pubsub::param::{serve, ParamSpec, ParamType, Refused, Reply, Request, Value};
 use std::path::Path;
 
-const USAGE: &str = "usage: rtcan param (list | get <node.name> | set <node.name> <value>) [--sim robot.toml] [--json]";
-
 fn ty(t: ParamTy) -> ParamType {
     match t {
         ParamTy::F32 => ParamType::F32,
@@ -116,33 +114,46 @@ fn json_str(s: &str) -> String {
     o
 }
 
+/// `rtcan param`: every module's parameter server runs in this process (--sim).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(subcommand)]
+    op: Op,
+    /// The simulated robot
+    #[arg(
+        long,
+        value_name = "robot.toml",
+        default_value = "robot.toml",
+        global = true
+    )]
+    sim: String,
+    /// One JSON object per parameter
+    #[arg(long, global = true)]
+    json: bool,
+}
+
+#[derive(clap::Subcommand, Debug)]
+enum Op {
+    /// Every parameter with its value, type, range and default
+    List,
+    /// One parameter's value
+    Get {
+        /// The parameter as <node.name>
+        name: String,
+    },
+    /// Set a parameter; exit 1 when the module refuses the value
+    Set {
+        /// The parameter as <node.name>
+        name: String,
+        /// The new value, in the parameter's type
+        #[arg(allow_hyphen_values = true)]
+        value: String,
+    },
+}
+
 /// Exit code: 0 done, 1 refused by the module, 2 bad input or usage.
-pub fn run(args: &[String]) -> i32 {
-    let mut json = false;
-    let mut robot = "robot.toml".to_string();
-    let mut words: Vec<&str> = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--json" => json = true,
-            "--sim" => match it.next() {
-                Some(p) => robot = p.clone(),
-                None => {
-                    eprintln!("error: `--sim` needs a robot.toml\n{USAGE}");
-                    return 2;
-                }
-            },
-            "-h" | "--help" => {
-                println!("{USAGE}");
-                return 0;
-            }
-            s if s.starts_with("--") => {
-                eprintln!("error: unknown option `{s}`\n{USAGE}");
-                return 2;
-            }
-            s => words.push(s),
-        }
-    }
+pub fn run(a: Args) -> i32 {
+    let (json, robot) = (a.json, a.sim);
     let (plan, params) =
         match read_source(Path::new(&robot), &robot).and_then(|src| load(&robot, &src)) {
             Ok(x) => x,
@@ -212,8 +223,8 @@ pub fn run(args: &[String]) -> i32 {
             )
         }
     };
-    match words.as_slice() {
-        ["list"] => {
+    match &a.op {
+        Op::List => {
             let mut rows = Vec::new();
             for p in &params {
                 match call(p, Request::List { index: p.index }) {
@@ -233,7 +244,7 @@ pub fn run(args: &[String]) -> i32 {
             }
             0
         }
-        ["get", name] => match find(name) {
+        Op::Get { name } => match find(name) {
             Err(e) => {
                 eprintln!("error: {e}");
                 2
@@ -249,7 +260,7 @@ pub fn run(args: &[String]) -> i32 {
                 }
             },
         },
-        ["set", name, v] => {
+        Op::Set { name, value: v } => {
             let p = match find(name) {
                 Ok(p) => p,
                 Err(e) => {
@@ -286,12 +297,6 @@ pub fn run(args: &[String]) -> i32 {
                     1
                 }
             }
-        }
-        _ => {
-            eprintln!(
-                "error: expected `list`, `get <node.name>` or `set <node.name> <value>`\n{USAGE}"
-            );
-            2
         }
     }
 }

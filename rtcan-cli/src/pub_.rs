@@ -4,46 +4,28 @@
 use rtcan_host::value::{field_list, from_json};
 use rtcan_sim::decode::{Decoded, Decoder};
 
-use crate::link_args::{entry, LinkArgs, HELP};
+use crate::link_args::{entry, LinkArgs};
 
-fn usage() -> String {
-    format!(
-        "usage: rtcan pub TOPIC JSON [bus options] [--seconds S]\n\n\
-         JSON is an object with every field of TOPIC's type, e.g.\n\
-         rtcan pub teleop '{{\"vx\":0.3,\"vy\":0,\"wz\":0}}'\n\
-         a value that does not fit its field's type is refused (exit 2)\n\n{HELP}"
-    )
+/// `rtcan pub`: JSON is an object with every field of TOPIC's type, e.g.
+/// `rtcan pub teleop '{"vx":0.3,"vy":0,"wz":0}'`; a value that does not fit its field's
+/// type is refused (exit 2). Then watches the bus for --seconds (default 1).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The topic, by its robot.toml name
+    topic: String,
+    /// The value, a JSON object with the topic's field names
+    #[arg(allow_hyphen_values = true)]
+    value: String,
+    #[command(flatten)]
+    la: LinkArgs,
 }
 
 /// Runs `rtcan pub`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut la = LinkArgs::default();
-    let mut pos = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match la.take(a, &mut it) {
-            Err(e) => return crate::usage_error(&e, &usage()),
-            Ok(true) => continue,
-            Ok(false) => {}
-        }
-        match a.as_str() {
-            "-h" | "--help" => {
-                println!("{}", usage());
-                return 0;
-            }
-            s if s.starts_with("--") => {
-                return crate::usage_error(&format!("unknown option `{s}`"), &usage())
-            }
-            s => pos.push(s.to_string()),
-        }
+pub fn run(mut a: Args) -> i32 {
+    if a.la.seconds.is_none() {
+        a.la.seconds = Some(1.0);
     }
-    let [topic, value] = pos.as_slice() else {
-        return crate::usage_error("give a TOPIC and a JSON value", &usage());
-    };
-    if la.seconds.is_none() {
-        la.seconds = Some(1.0);
-    }
-    match publish(&la, topic, value) {
+    match publish(&a.la, &a.topic, &a.value) {
         Ok(()) => 0,
         Err((code, e)) => {
             eprintln!("error: {e}");

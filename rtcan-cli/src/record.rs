@@ -6,54 +6,27 @@ use std::io::Write as _;
 use rtcan_host::Source;
 use rtcan_sim::candump;
 
-use crate::link_args::{LinkArgs, HELP};
+use crate::link_args::LinkArgs;
 
-fn usage() -> String {
-    format!(
-        "usage: rtcan record FILE [--log-epoch SECONDS] [bus options] [--seconds S] [--count N]\n\n\
-         writes every frame of the bus to FILE (`-`: standard output) in candump -l format;\n\
-         --count counts frames here\n\n{HELP}"
-    )
+/// `rtcan record`: writes every frame of the bus to FILE (`-`: standard output) in
+/// `candump -l` format; --count counts frames here.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The log to write (`-`: standard output)
+    #[arg(allow_hyphen_values = true)]
+    file: String,
+    /// Stamp simulated frames from this epoch: seconds since 1970 or `now` (default)
+    #[arg(long, value_name = "SECONDS|now", value_parser = crate::log_epoch::parse)]
+    log_epoch: Option<u64>,
+    #[command(flatten)]
+    la: LinkArgs,
 }
 
 /// Runs `rtcan record`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    let mut la = LinkArgs::default();
-    let (mut file, mut epoch) = (None, None);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match la.take(a, &mut it) {
-            Err(e) => return crate::usage_error(&e, &usage()),
-            Ok(true) => continue,
-            Ok(false) => {}
-        }
-        match a.as_str() {
-            "-h" | "--help" => {
-                println!("{}", usage());
-                return 0;
-            }
-            "--log-epoch" => match it.next().map(|v| v.parse::<f64>()) {
-                Some(Ok(e)) if (0.0..1e11).contains(&e) => epoch = Some((e * 1e9) as u64),
-                _ => {
-                    return crate::usage_error(
-                        "--log-epoch needs seconds since 1970 (e.g. 1700000000)",
-                        &usage(),
-                    )
-                }
-            },
-            s if s.starts_with('-') && s != "-" => {
-                return crate::usage_error(&format!("unknown option `{s}`"), &usage())
-            }
-            s if file.is_none() => file = Some(s.to_string()),
-            s => return crate::usage_error(&format!("one file only (`{s}`)"), &usage()),
-        }
-    }
-    let Some(file) = file else {
-        return crate::usage_error("no output file given", &usage());
-    };
-    match record(&la, &file, epoch) {
+pub fn run(a: Args) -> i32 {
+    match record(&a.la, &a.file, a.log_epoch) {
         Ok(n) => {
-            eprintln!("recorded {n} frames to {file}");
+            eprintln!("recorded {n} frames to {}", a.file);
             0
         }
         Err(e) => {
@@ -72,13 +45,10 @@ fn record(la: &LinkArgs, file: &str, epoch: Option<u64>) -> Result<u64, String> 
             std::fs::File::create(file).map_err(|e| format!("{file}: {e}"))?,
         ))
     };
-    let epoch = match (&la.source, epoch) {
+    let epoch = match (&la.source(), epoch) {
         (Source::Replay(_), _) => 0,
         (_, Some(e)) => e,
-        (_, None) => std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_err(|e| e.to_string())?
-            .as_nanos() as u64,
+        (_, None) => crate::log_epoch::parse("now")?,
     };
     let mut link = la.open(&plan)?;
     let end = la.end_ns(link.now_ns());

@@ -5,124 +5,137 @@ use std::path::{Path, PathBuf};
 
 use rtcan_sim::policy::PolicyKind;
 use rtcan_sim::run::{Run, Scenario, SimConfig};
-use rtcan_sim::session::{self, built_in_list, Report, Request, Speed, Which};
+use rtcan_sim::session::{self, Report, Request, Speed, Which};
 use rtcan_sim::triskar::report as triskar_report;
 use rtcan_sim::{candump, report, svg};
 
-const SYNOPSIS: &str =
-    "usage: rtcan sim [robot.toml] [--scenario rtcan-paper|triskar2|file.toml] [--seconds N]
-                 [--seed S] [--load X] [--ber P] [--json] [--out DIR] [--sweep]
-                 [--master-dies-at S] [--fault MODULE:KIND[=D]@T]...
-                 [--cpu on|off] [--cpu-design prioritised|single-priority] [--cpi X]
-                 [--cpu-cost max|mean]
-       rtcan sim [robot.toml] --emulate [--seconds N] [--seed N] [--cpi X] [--json] [--images DIR]
-       rtcan sim [robot.toml] --campaign [--seconds N] [--seed S] [--json]
-       rtcan sim --help";
+/// `rtcan sim`: the workspace robot runs triskar2, any other robot its generic traffic
+/// scenario. `--emulate` runs the Triskar2 release images on emulated STM32F103s instead
+/// (options --seconds, --seed, --cpi, --json, --images; docs/EMULATOR.md); `--campaign`
+/// runs the fault campaign on triskar2 and rtcan-paper, N s per case (default 10).
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The robot (default ./robot.toml)
+    #[arg(value_name = "robot.toml")]
+    robot: Vec<PathBuf>,
+    /// A built-in scenario or a scenario file (docs/SIM.md)
+    #[arg(long, value_name = "NAME")]
+    scenario: Option<String>,
+    /// Simulated time, 0 < N <= 100000 (triskar2 default 10, others 1)
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    seconds: Option<f64>,
+    /// Seed of every random stream
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
+    /// SRT event-rate scale, 0 < X <= 100
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    load: Option<f64>,
+    /// Bit error rate, 0 <= P < 1
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    ber: Option<f64>,
+    /// The report as JSON on stdout
+    #[arg(long)]
+    json: bool,
+    /// Write candump log, SVG plots and report.json to DIR
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Stamp DIR/can0.log from this epoch, seconds since 1970 or `now`, for tools that
+    /// read candump logs (log2asc); default 0, the simulated timeline
+    #[arg(long, value_name = "SECONDS|now", requires = "out", value_parser = crate::log_epoch::parse)]
+    log_epoch: Option<u64>,
+    /// rtcan-paper: add the load sweep 0.5..1.2
+    #[arg(long)]
+    sweep: bool,
+    /// triskar2: the bus master stops at S seconds (S >= 0)
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    master_dies_at: Option<String>,
+    /// triskar2, repeatable: MODULE:KIND@T, KIND one of dies, returns, reset, babble,
+    /// stuck, release, partition, rejoin, stall=D, step=+D or step=-D (T, D with unit s,
+    /// ms or us), e.g. --fault gateway:dies@2s (docs/SIM.md, Faults)
+    #[arg(long, value_name = "F")]
+    fault: Vec<String>,
+    /// The fault campaign on triskar2 and rtcan-paper: one table, or JSON with --json
+    #[arg(long)]
+    campaign: bool,
+    /// Run every module's handlers on the modelled CPU
+    #[arg(long, value_name = "on|off", default_value = "on")]
+    cpu: String,
+    /// prioritised (new, default) or single-priority (old) interrupt design
+    #[arg(long, value_name = "D")]
+    cpu_design: Option<String>,
+    /// Cycles per instruction of the CPU model at 72 MHz (default 1.25)
+    #[arg(long, value_name = "X")]
+    cpi: Option<f64>,
+    /// Every handler at its longest (max, default) or mean measured path
+    #[arg(long, value_name = "max|mean")]
+    cpu_cost: Option<String>,
+    /// Run the release images on the emulator (rtcan-emu)
+    #[arg(long)]
+    emulate: bool,
+    /// --emulate: the directory of the release images
+    #[arg(long, value_name = "DIR", requires = "emulate")]
+    images: Option<PathBuf>,
+}
 
-const OPTIONS: &str =
-    "  robot.toml          the robot (default ./robot.toml): the workspace robot runs triskar2,
-                      any other robot its generic traffic scenario
-  --scenario NAME     a built-in scenario or a scenario file (docs/SIM.md)
-  --seconds N         simulated time, 0 < N <= 100000 (triskar2 default 10, others 1)
-  --seed S            seed of every random stream
-  --load X            SRT event-rate scale, 0 < X <= 100
-  --ber P             bit error rate, 0 <= P < 1
-  --json              the report as JSON on stdout
-  --out DIR           write candump log, SVG plots and report.json to DIR
-  --sweep             rtcan-paper: add the load sweep 0.5..1.2
-  --master-dies-at S  triskar2: the bus master stops at S seconds (S >= 0)
-  --fault F           triskar2, repeatable: MODULE:KIND@T, KIND one of dies, returns,
-                      reset, babble, stuck, release, partition, rejoin, stall=D, step=+D
-                      or step=-D (T, D with unit s, ms or us), e.g. --fault gateway:dies@2s
-                      --fault gateway:returns@5s (docs/SIM.md, Faults)
-  --campaign          the fault campaign on triskar2 and rtcan-paper, N s per case
-                      (default 10): one table, or JSON with --json
-  --cpu on|off        run every module's handlers on the modelled CPU (default on)
-  --cpu-design D      prioritised (new, default) or single-priority (old) interrupt design
-  --cpi X             cycles per instruction of the CPU model at 72 MHz (default 1.25)
-  --cpu-cost max|mean every handler at its longest (default) or mean measured path";
-
-/// Parsed command line.
+/// Parsed and checked command line.
 #[derive(Debug)]
-struct Args {
+struct Parsed {
     req: Request,
     json: bool,
     out: Option<PathBuf>,
+    log_epoch: Option<u64>,
 }
 
-/// `Ok(None)`: help was asked for.
-fn parse(args: &[String]) -> Result<Option<Args>, String> {
-    let mut robot: Option<PathBuf> = None;
-    let mut scenario: Option<String> = None;
+fn parse(a: Args) -> Result<Parsed, String> {
     let mut cfg = SimConfig::default();
-    let (mut json, mut sweep, mut seconds_given) = (false, false, false);
-    let mut out = None;
-    let mut master_dies_at = None;
-    let mut faults = Vec::new();
-    let mut campaign = false;
-    // The CPU model (rtcan_sim::cpu): on by default, prioritised design, CPI 1.25.
-    let (mut cpu_on, mut design, mut cpi) = (true, rtcan_model::costs::Design::Prioritised, 1.25);
-    let mut cost = rtcan_sim::cpu::Cost::Max;
-    let mut it = args.iter();
-    while let Some(arg) = it.next() {
-        let mut value = |name: &str| it.next().cloned().ok_or(format!("{name} needs a value"));
-        match arg.as_str() {
-            "-h" | "--help" => return Ok(None),
-            "--scenario" => scenario = Some(value("--scenario")?),
-            "--seconds" => {
-                cfg.seconds = value("--seconds")?.parse().map_err(|_| "bad --seconds")?;
-                seconds_given = true;
+    let seconds_given = a.seconds.is_some();
+    cfg.seconds = a.seconds.unwrap_or(cfg.seconds);
+    cfg.seed = a.seed.unwrap_or(cfg.seed);
+    cfg.load = a.load.unwrap_or(cfg.load);
+    cfg.bit_error_rate = a.ber.unwrap_or(cfg.bit_error_rate);
+    let (json, sweep, out, faults, campaign) = (a.json, a.sweep, a.out, a.fault, a.campaign);
+    let log_epoch = a.log_epoch;
+    let master_dies_at = match a.master_dies_at {
+        None => None,
+        Some(t) => match t.parse::<f64>() {
+            Ok(v) if v.is_finite() && v >= 0.0 => Some(v),
+            _ => {
+                return Err(format!(
+                    "--master-dies-at must be a time in seconds >= 0, not {t}"
+                ))
             }
-            "--master-dies-at" => {
-                let v: f64 = value("--master-dies-at")?
-                    .parse()
-                    .map_err(|_| "bad --master-dies-at")?;
-                if !(v.is_finite() && v >= 0.0) {
-                    return Err(format!(
-                        "--master-dies-at must be a time in seconds >= 0, not {v}"
-                    ));
-                }
-                master_dies_at = Some(v);
-            }
-            "--fault" => faults.push(value("--fault")?),
-            "--campaign" => campaign = true,
-            "--seed" => cfg.seed = value("--seed")?.parse().map_err(|_| "bad --seed")?,
-            "--load" => cfg.load = value("--load")?.parse().map_err(|_| "bad --load")?,
-            "--ber" => cfg.bit_error_rate = value("--ber")?.parse().map_err(|_| "bad --ber")?,
-            "--out" => out = Some(PathBuf::from(value("--out")?)),
-            "--cpu" => {
-                cpu_on = match value("--cpu")?.as_str() {
-                    "on" => true,
-                    "off" => false,
-                    v => return Err(format!("--cpu must be `on` or `off`, not `{v}`")),
-                }
-            }
-            "--cpu-design" => {
-                let v = value("--cpu-design")?;
-                design = rtcan_model::costs::Design::from_name(&v).ok_or(format!(
-                    "unknown --cpu-design `{v}` (prioritised or single-priority; new / old)"
-                ))?;
-            }
-            "--cpi" => cpi = value("--cpi")?.parse().map_err(|_| "bad --cpi")?,
-            "--cpu-cost" => {
-                let v = value("--cpu-cost")?;
-                cost = rtcan_sim::cpu::Cost::from_name(&v)
-                    .ok_or(format!("--cpu-cost must be `max` or `mean`, not `{v}`"))?;
-            }
-            "--json" => json = true,
-            "--sweep" => sweep = true,
-            s if s.starts_with('-') && s.len() > 1 => return Err(format!("unknown option `{s}`")),
-            s => {
-                if let Some(first) = &robot {
-                    return Err(format!(
-                        "two robot paths, `{}` and `{s}`: give one",
-                        first.display()
-                    ));
-                }
-                robot = Some(PathBuf::from(s));
-            }
+        },
+    };
+    let robot = match a.robot.as_slice() {
+        [] => None,
+        [one] => Some(one.clone()),
+        [first, second, ..] => {
+            return Err(format!(
+                "two robot paths, `{}` and `{}`: give one",
+                first.display(),
+                second.display()
+            ))
         }
-    }
+    };
+    let scenario = a.scenario;
+    // The CPU model (rtcan_sim::cpu): on by default, prioritised design, CPI 1.25.
+    let cpu_on = match a.cpu.as_str() {
+        "on" => true,
+        "off" => false,
+        v => return Err(format!("--cpu must be `on` or `off`, not `{v}`")),
+    };
+    let design = match a.cpu_design {
+        None => rtcan_model::costs::Design::Prioritised,
+        Some(v) => rtcan_model::costs::Design::from_name(&v).ok_or(format!(
+            "unknown --cpu-design `{v}` (prioritised or single-priority; new / old)"
+        ))?,
+    };
+    let cpi = a.cpi.unwrap_or(1.25);
+    let cost = match a.cpu_cost {
+        None => rtcan_sim::cpu::Cost::Max,
+        Some(v) => rtcan_sim::cpu::Cost::from_name(&v)
+            .ok_or(format!("--cpu-cost must be `max` or `mean`, not `{v}`"))?,
+    };
     if !(cfg.seconds > 0.0 && cfg.seconds <= 100_000.0) {
         return Err("--seconds must be in (0, 100000]".into());
     }
@@ -162,7 +175,7 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
     } else {
         None
     };
-    Ok(Some(Args {
+    Ok(Parsed {
         req: Request {
             which,
             cfg,
@@ -174,7 +187,57 @@ fn parse(args: &[String]) -> Result<Option<Args>, String> {
         },
         json,
         out,
-    }))
+        log_epoch,
+    })
+}
+
+/// `--emulate`: the options that apply to rtcan-emu, in its syntax; any other is an error.
+fn emulate_args(a: Args) -> Result<Vec<String>, String> {
+    let other = [
+        ("--scenario", a.scenario.is_some()),
+        ("--load", a.load.is_some()),
+        ("--ber", a.ber.is_some()),
+        ("--out", a.out.is_some()),
+        ("--log-epoch", a.log_epoch.is_some()),
+        ("--sweep", a.sweep),
+        ("--master-dies-at", a.master_dies_at.is_some()),
+        ("--fault", !a.fault.is_empty()),
+        ("--campaign", a.campaign),
+        ("--cpu", a.cpu != "on"),
+        ("--cpu-design", a.cpu_design.is_some()),
+        ("--cpu-cost", a.cpu_cost.is_some()),
+    ];
+    if let Some((flag, _)) = other.iter().find(|(_, set)| *set) {
+        return Err(format!(
+            "`{flag}` does not apply with --emulate (options: --seconds, --seed, --cpi, --json, --images)"
+        ));
+    }
+    let mut forward = Vec::new();
+    for robot in &a.robot {
+        // The images are built from the workspace robot: another file cannot run.
+        if !crate::emulate::same_file(robot, Path::new("robot.toml")) {
+            return Err(format!(
+                "--emulate runs the images of the workspace robot (./robot.toml), not `{}`",
+                robot.display()
+            ));
+        }
+    }
+    if a.json {
+        forward.push("--json".to_string());
+    }
+    let pairs = [
+        ("--seconds", a.seconds.map(|v| v.to_string())),
+        ("--seed", a.seed.map(|v| v.to_string())),
+        ("--cpi", a.cpi.map(|v| v.to_string())),
+        ("--images", a.images.map(|v| v.display().to_string())),
+    ];
+    for (flag, v) in pairs {
+        if let Some(v) = v {
+            forward.push(flag.to_string());
+            forward.push(v);
+        }
+    }
+    Ok(forward)
 }
 
 /// Writes to stdout; a closed pipe (`| head`) ends the output quietly.
@@ -193,23 +256,16 @@ fn prepare_out(dir: &Path) -> Result<(), String> {
 }
 
 /// Runs `rtcan sim`; returns the exit code.
-pub fn run(args: &[String]) -> i32 {
-    if crate::emulate::wanted(args) {
-        return crate::emulate::run(args);
+pub fn run(a: Args) -> i32 {
+    if a.emulate {
+        return match emulate_args(a) {
+            Ok(forward) => crate::emulate::run(&forward),
+            Err(e) => crate::usage_error("sim", &e),
+        };
     }
-    let a = match parse(args) {
-        Ok(Some(a)) => a,
-        Ok(None) => {
-            emit(&format!(
-                "{SYNOPSIS}\n\n{OPTIONS}\n\nbuilt-in scenarios:\n{}\n",
-                built_in_list()
-            ));
-            return 0;
-        }
-        Err(e) => {
-            eprintln!("error: {e}\n{SYNOPSIS}");
-            return 2;
-        }
+    let a = match parse(a) {
+        Ok(a) => a,
+        Err(e) => return crate::usage_error("sim", &e),
     };
     if let Some(dir) = &a.out {
         if let Err(e) = prepare_out(dir) {
@@ -224,7 +280,11 @@ pub fn run(args: &[String]) -> i32 {
             return 1;
         }
     };
-    match print_and_write(&a, &rep) {
+    let written = print_and_write(&a, &rep).and_then(|()| match (&a.out, a.log_epoch) {
+        (Some(dir), Some(e)) => crate::log_epoch::shift_file(&dir.join("can0.log"), e),
+        _ => Ok(()),
+    });
+    match written {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -317,11 +377,7 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
     Ok(())
 }
 
-fn json_str(s: &str) -> String {
-    s.replace('\\', "\\\\").replace('"', "\\\"")
-}
-
-fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
+fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
     let cfg = &a.req.cfg;
     match rep {
         Report::Paper {
@@ -332,15 +388,16 @@ fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
             all_wall_s,
         } => {
             if a.json {
-                let pts: Vec<String> = sweep.iter().map(report::comparison_json).collect();
-                emit(&format!(
-                    "{{\"scenario\":\"rtcan-paper\",\"seconds\":{},\"seed\":{},\"comparison\":{},\"sweep\":[{}],\"speed_x_real_time\":{:.1}}}\n",
-                    cfg.seconds,
-                    cfg.seed,
-                    report::comparison_json(comparison),
-                    pts.join(","),
-                    speed.x_real_time()
-                ));
+                let pts: Vec<_> = sweep.iter().map(report::comparison_value).collect();
+                let v = serde_json::json!({
+                    "scenario": "rtcan-paper",
+                    "seconds": cfg.seconds,
+                    "seed": cfg.seed,
+                    "comparison": report::comparison_value(comparison),
+                    "sweep": pts,
+                    "speed_x_real_time": speed.x_real_time(),
+                });
+                emit(&format!("{v}\n"));
             } else {
                 let mut t = format!(
                     "rtcan-paper: {} s simulated, seed {}\n\n",
@@ -402,14 +459,14 @@ fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
                 eprintln!("note: {}", n.replace('\n', "\nnote: "));
             }
             if a.json {
-                emit(&format!(
-                    "{{\"robot\":\"{}\",\"seconds\":{},\"seed\":{},\"run\":{},\"speed_x_real_time\":{:.1}}}\n",
-                    json_str(file),
-                    cfg.seconds,
-                    cfg.seed,
-                    report::run_json(run),
-                    speed.x_real_time()
-                ));
+                let v = serde_json::json!({
+                    "robot": file,
+                    "seconds": cfg.seconds,
+                    "seed": cfg.seed,
+                    "run": report::run_value(run),
+                    "speed_x_real_time": speed.x_real_time(),
+                });
+                emit(&format!("{v}\n"));
             } else {
                 emit(&format!(
                     "{file}: {} s simulated, seed {}\n\n{}{}\n",
@@ -487,30 +544,43 @@ fn print_and_write(a: &Args, rep: &Report) -> Result<(), String> {
 mod tests {
     use super::*;
 
-    fn args(s: &str) -> Vec<String> {
-        s.split_whitespace().map(String::from).collect()
+    /// `rtcan sim S` through clap and `parse`; `Ok(None)`: help was asked for.
+    fn parse_line(s: &str) -> Result<Option<Parsed>, String> {
+        let argv = ["rtcan", "sim"].into_iter().chain(s.split_whitespace());
+        let m = match crate::command().try_get_matches_from(argv) {
+            Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelp => return Ok(None),
+            Err(e) => return Err(e.to_string()),
+            Ok(m) => m,
+        };
+        match <crate::Cli as clap::FromArgMatches>::from_arg_matches(&m)
+            .map_err(|e| e.to_string())?
+            .cmd
+        {
+            crate::Cmd::Sim(a) => parse(*a).map(Some),
+            _ => Err("not sim".into()),
+        }
     }
 
     #[test]
     fn parse_rejects_what_it_cannot_honour() {
-        assert!(parse(&args("--help")).unwrap().is_none());
-        assert!(parse(&args("robot.toml -h")).unwrap().is_none());
-        let e = parse(&args("a.toml b.toml")).unwrap_err();
+        assert!(parse_line("--help").unwrap().is_none());
+        assert!(parse_line("robot.toml -h").unwrap().is_none());
+        let e = parse_line("a.toml b.toml").unwrap_err();
         assert!(e.contains("two robot paths"), "{e}");
         for v in ["-1", "NaN", "inf"] {
-            let e = parse(&args(&format!("--master-dies-at {v}"))).unwrap_err();
+            let e = parse_line(&format!("--master-dies-at {v}")).unwrap_err();
             assert!(e.contains("--master-dies-at"), "{v}: {e}");
         }
-        let e = parse(&args("--scenario rtcan_paper")).unwrap_err();
+        let e = parse_line("--scenario rtcan_paper").unwrap_err();
         assert!(
             e.contains("unknown scenario") && e.contains("rtcan-paper"),
             "{e}"
         );
-        let e = parse(&args("--scenario rtcan-paper --master-dies-at 1")).unwrap_err();
+        let e = parse_line("--scenario rtcan-paper --master-dies-at 1").unwrap_err();
         assert!(e.contains("triskar2 scenario only"), "{e}");
-        let e = parse(&args("robot.toml --sweep")).unwrap_err();
+        let e = parse_line("robot.toml --sweep").unwrap_err();
         assert!(e.contains("rtcan-paper scenario only"), "{e}");
-        let ok = parse(&args("--scenario rtcan-paper --seconds 2"))
+        let ok = parse_line("--scenario rtcan-paper --seconds 2")
             .unwrap()
             .unwrap();
         assert_eq!(ok.req.which, Which::Paper);
@@ -519,29 +589,27 @@ mod tests {
 
     #[test]
     fn fault_and_campaign_flags() {
-        let ok = parse(&args(
-            "robot.toml --fault gateway:dies@2s --fault gateway:returns@5000ms",
-        ))
-        .unwrap()
-        .unwrap();
+        let ok = parse_line("robot.toml --fault gateway:dies@2s --fault gateway:returns@5000ms")
+            .unwrap()
+            .unwrap();
         assert_eq!(ok.req.faults, ["gateway:dies@2s", "gateway:returns@5000ms"]);
         for bad in ["motor9:dies@1s", "gateway:explodes@1s", "gateway:dies@1"] {
-            let e = parse(&args(&format!("--fault {bad}"))).unwrap_err();
+            let e = parse_line(&format!("--fault {bad}")).unwrap_err();
             assert!(e.contains(bad) && e.contains("accepted"), "{bad}: {e}");
         }
-        let e = parse(&args("--scenario rtcan-paper --fault gateway:dies@1s")).unwrap_err();
+        let e = parse_line("--scenario rtcan-paper --fault gateway:dies@1s").unwrap_err();
         assert!(e.contains("triskar2 scenario only"), "{e}");
-        let c = parse(&args("--campaign")).unwrap().unwrap();
+        let c = parse_line("--campaign").unwrap().unwrap();
         assert!(c.req.campaign);
         assert_eq!(c.req.cfg.seconds, 10.0);
-        let c = parse(&args("--campaign --seconds 1000 --json"))
+        let c = parse_line("--campaign --seconds 1000 --json")
             .unwrap()
             .unwrap();
         assert_eq!((c.req.cfg.seconds, c.json), (1000.0, true));
-        let e = parse(&args("--campaign --out /tmp/x")).unwrap_err();
+        let e = parse_line("--campaign --out /tmp/x").unwrap_err();
         assert!(e.contains("--out"), "{e}");
         let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml");
-        let short = parse(&args(&format!("{robot} --campaign --seconds 2")))
+        let short = parse_line(&format!("{robot} --campaign --seconds 2"))
             .unwrap()
             .unwrap();
         let e = session::run(&short.req, &mut |_, _| {}).unwrap_err();
@@ -553,9 +621,7 @@ mod tests {
             "--master-dies-at 1",
             "--fault motor1:dies@1s",
         ] {
-            let a = parse(&args(&format!("--campaign {extra}")))
-                .unwrap()
-                .unwrap();
+            let a = parse_line(&format!("--campaign {extra}")).unwrap().unwrap();
             let e = session::run(&a.req, &mut |_, _| {}).unwrap_err();
             assert!(e.contains("--campaign"), "{extra}: {e}");
         }

@@ -43,5 +43,9 @@ fn emulate_rejects_simulator_only_options() {
     );
     let (code, err) = rtcan(&["sim", "robot.toml", "--emulate", "--seconds"]);
     assert_eq!(code, 2);
-    assert!(err.contains("--seconds needs a value"), "{err}");
+    // clap's report of a missing value.
+    assert!(
+        err.contains("a value is required for '--seconds <N>'"),
+        "{err}"
+    );
 }

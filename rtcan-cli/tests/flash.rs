@@ -84,7 +84,7 @@ fn flash_json_fields_and_a_refused_image() {
 #[test]
 fn flash_usage_errors() {
     for (args, msg) in [
-        (&["flash"][..], "give --module M or --all"),
+        (&["flash"][..], "required arguments were not provided"),
         (
             &["flash", "--module", "gateway"],
             "updated over its host link",
@@ -92,7 +92,7 @@ fn flash_usage_errors() {
         (&["flash", "--module", "wheel9"], "no module `wheel9`"),
         (
             &["flash", "--all", "--module", "psu"],
-            "give --module M or --all",
+            "cannot be used with",
         ),
         (&["flash", "--all", "--can", "can0"], "simulator only"),
         (

@@ -53,10 +53,27 @@ pub fn open(
             &rtcan_sim::decode::plan_catalog(plan),
             &plan.bridge.link,
         )?)),
-        Source::Can(iface) => Err(format!(
-            "--can {iface}: SocketCAN is not built into this rtcan \
-             (reach the robot with --sim ROBOT.toml or --replay LOG; \
-             record a log on the robot with `candump -l {iface}`)"
-        )),
+        Source::Can(iface) => open_can(iface, plan),
     }
+}
+
+/// A SocketCAN interface as a [`crate::can::CanLink`].
+#[cfg(all(target_os = "linux", feature = "socketcan"))]
+fn open_can(iface: &str, plan: &rtcan_model::Plan) -> Result<Box<dyn Link>, String> {
+    let port = crate::can::socket::SocketPort::open(iface, plan.bus.bitrate)?;
+    Ok(Box::new(crate::can::CanLink::new(
+        port,
+        rtcan_sim::decode::plan_catalog(plan),
+    )))
+}
+
+/// Without the `socketcan` feature (or off Linux) there is no socket to open.
+#[cfg(not(all(target_os = "linux", feature = "socketcan")))]
+fn open_can(iface: &str, _plan: &rtcan_model::Plan) -> Result<Box<dyn Link>, String> {
+    Err(format!(
+        "--can {iface}: SocketCAN is not built into this rtcan \
+         (build it with `--features socketcan` on Linux; or reach the robot with \
+         --sim ROBOT.toml or --replay LOG, recording a log on the robot with \
+         `candump -l {iface}`)"
+    ))
 }

@@ -34,6 +34,55 @@ struct TopicSeen {
     last_xfer_ns: Nanos,
 }
 
+/// One module as the monitor shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModuleRow {
+    /// Name (robot.toml), `?` for an index the robot does not have.
+    pub name: String,
+    /// Bus index.
+    pub index: u8,
+    /// Time since its last heartbeat, ms.
+    pub age_ms: f64,
+    /// State byte of its last heartbeat.
+    pub state: u8,
+    /// Fingerprint of its last heartbeat.
+    pub fingerprint: u32,
+    /// Whether that is this robot's fingerprint (`None`: the robot's is unknown).
+    pub matches: Option<bool>,
+}
+
+/// One topic as the monitor shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TopicRow {
+    /// Name.
+    pub name: String,
+    /// HRT, SRT or NRT.
+    pub class: &'static str,
+    /// Messages seen.
+    pub count: u64,
+    /// Mean rate between the first and the last message, Hz.
+    pub rate_hz: f64,
+    /// First to last frame of the last message, ms.
+    pub xfer_ms: f64,
+    /// The last value as JSON, `-` before the first.
+    pub last: String,
+}
+
+/// Everything the monitor shows at one moment.
+#[derive(Clone, Debug, PartialEq)]
+pub struct View {
+    /// Bus time, s.
+    pub time_s: f64,
+    /// Frames seen.
+    pub frames: u64,
+    /// Modules heard, by index.
+    pub modules: Vec<ModuleRow>,
+    /// Every topic of the catalog.
+    pub topics: Vec<TopicRow>,
+    /// Share of the bus per class (sync, HRT, SRT, NRT, other), %.
+    pub load: [(&'static str, f64); 5],
+}
+
 /// Live figures of one bus.
 #[derive(Clone, Debug)]
 pub struct Monitor {
@@ -152,64 +201,94 @@ impl Monitor {
         })
     }
 
-    /// The table, as of bus time `now`.
-    pub fn render(&self, cat: &Catalog) -> String {
+    /// What the monitor shows, as of the latest frame: one row per module heard, one per
+    /// topic of the catalog, the load per class (the table and the live view alike).
+    pub fn view(&self, cat: &Catalog) -> View {
         let now = self.now_ns;
+        let modules = self
+            .modules
+            .iter()
+            .map(|(i, m)| ModuleRow {
+                name: self
+                    .module_names
+                    .get(usize::from(*i))
+                    .cloned()
+                    .unwrap_or_else(|| "?".into()),
+                index: *i,
+                age_ms: now.saturating_sub(m.last_ns) as f64 * 1e-6,
+                state: m.state,
+                fingerprint: m.fingerprint,
+                matches: self.fingerprint.map(|fp| fp == m.fingerprint),
+            })
+            .collect();
+        let topics = cat
+            .topics
+            .iter()
+            .zip(&self.topics)
+            .map(|(t, seen)| TopicRow {
+                name: t.name.clone(),
+                class: match t.class {
+                    Class::Hrt => "HRT",
+                    Class::Srt => "SRT",
+                    Class::Nrt => "NRT",
+                },
+                count: seen.count,
+                rate_hz: if seen.count > 1 && seen.last_ns > seen.first_ns {
+                    (seen.count - 1) as f64 / ((seen.last_ns - seen.first_ns) as f64 * 1e-9)
+                } else {
+                    0.0
+                },
+                xfer_ms: seen.last_xfer_ns as f64 * 1e-6,
+                last: seen
+                    .last
+                    .as_ref()
+                    .map_or_else(|| "-".to_string(), |p| to_json(t, p).to_string()),
+            })
+            .collect();
+        let mut load = CLASSES.map(|c| (c, 0.0));
+        for (slot, p) in load.iter_mut().zip(self.load_pct()) {
+            slot.1 = p;
+        }
+        View {
+            time_s: now as f64 * 1e-9,
+            frames: self.frames,
+            modules,
+            topics,
+            load,
+        }
+    }
+
+    /// The table, as of the latest frame.
+    pub fn render(&self, cat: &Catalog) -> String {
+        let v = self.view(cat);
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "bus time {:.3} s, {} frames",
-            now as f64 * 1e-9,
-            self.frames
-        );
+        let _ = writeln!(s, "bus time {:.3} s, {} frames", v.time_s, v.frames);
         let _ = writeln!(s, "\nMODULE      #   HB AGE ms  STATE  FINGERPRINT  MATCH");
-        for (i, m) in &self.modules {
-            let name = self
-                .module_names
-                .get(usize::from(*i))
-                .map_or("?", String::as_str);
-            let matches = match self.fingerprint {
-                Some(fp) if fp == m.fingerprint => "yes",
-                Some(_) => "NO",
+        for m in &v.modules {
+            let matches = match m.matches {
+                Some(true) => "yes",
+                Some(false) => "NO",
                 None => "?",
             };
             let _ = writeln!(
                 s,
-                "{name:<10} {i:>2} {:>11.1} {:>6}   {:#010x}  {matches}",
-                now.saturating_sub(m.last_ns) as f64 * 1e-6,
-                m.state,
-                m.fingerprint
+                "{:<10} {:>2} {:>11.1} {:>6}   {:#010x}  {matches}",
+                m.name, m.index, m.age_ms, m.state, m.fingerprint
             );
         }
         let _ = writeln!(
             s,
             "\nTOPIC            CLASS  COUNT   RATE Hz  XFER ms  LAST"
         );
-        for (t, seen) in cat.topics.iter().zip(&self.topics) {
-            let rate = if seen.count > 1 && seen.last_ns > seen.first_ns {
-                (seen.count - 1) as f64 / ((seen.last_ns - seen.first_ns) as f64 * 1e-9)
-            } else {
-                0.0
-            };
-            let last = seen
-                .last
-                .as_ref()
-                .map_or_else(|| "-".to_string(), |p| to_json(t, p).to_string());
-            let class = match t.class {
-                Class::Hrt => "HRT",
-                Class::Srt => "SRT",
-                Class::Nrt => "NRT",
-            };
+        for t in &v.topics {
             let _ = writeln!(
                 s,
-                "{:<16} {class:<5} {:>6} {rate:>9.1} {:>8.3}  {last}",
-                t.name,
-                seen.count,
-                seen.last_xfer_ns as f64 * 1e-6
+                "{:<16} {:<5} {:>6} {:>9.1} {:>8.3}  {}",
+                t.name, t.class, t.count, t.rate_hz, t.xfer_ms, t.last
             );
         }
         let _ = write!(s, "\nLOAD %  ");
-        for (c, p) in CLASSES.iter().zip(self.load_pct()) {
+        for (c, p) in v.load {
             let _ = write!(s, " {c} {p:.1}");
         }
         s.push('\n');

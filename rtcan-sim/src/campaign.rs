@@ -492,82 +492,69 @@ pub fn table(rows: &[Row]) -> String {
     s
 }
 
-fn esc(s: &str) -> String {
-    s.replace('\\', "\\\\").replace('"', "\\\"")
-}
-
-fn null<T: std::fmt::Display>(v: Option<T>) -> String {
-    v.map_or("null".into(), |v| v.to_string())
-}
-
-fn strs(v: &[&str]) -> String {
-    v.iter()
-        .map(|m| format!("\"{}\"", esc(m)))
-        .collect::<Vec<_>>()
-        .join(",")
-}
-
 /// The campaign as JSON (one object per case; `goals_met` false names the goals missed
-/// in `goals_missed`).
+/// in `goals_missed`), through serde_json: times at full precision, strings escaped.
 pub fn json(rows: &[Row]) -> String {
-    let items: Vec<String> = rows
+    use crate::report::num;
+    use serde_json::{json, Value};
+    let ms = |v: Option<f64>| v.map_or(Value::Null, num);
+    let items: Vec<Value> = rows
         .iter()
         .map(|r| {
-            let topics: Vec<String> = r
+            let topics: Vec<Value> = r
                 .hrt
                 .iter()
                 .map(|h| {
-                    format!(
-                        "{{\"name\":\"{}\",\"delivered\":{},\"late\":{},\"lost\":{}}}",
-                        esc(&h.name),
-                        h.delivered,
-                        null(h.late),
-                        h.lost
-                    )
+                    json!({
+                        "name": h.name,
+                        "delivered": h.delivered,
+                        "late": h.late,
+                        "lost": h.lost,
+                    })
                 })
                 .collect();
             let (d, late, lost) = r.hrt_sum();
             let goals = r.goals();
-            let missed: Vec<String> = goals.iter().map(|g| format!("\"{}\"", esc(g))).collect();
-            format!(
-                "{{\"case\":\"{}\",\"scenario\":\"{}\",\"seconds\":{},\"ber\":{},\"eof_error_rate\":{},\"drift_ppm\":{},\"faults\":[{}],\"guardian\":{},\"hrt\":[{}],\"hrt_delivered\":{d},\"hrt_late\":{},\"hrt_lost\":{lost},\"hrt_loaded_late\":{},\"srt_count\":{},\"srt_misses\":{},\"bad_deliveries\":{},\"transfers_dropped\":{},\"error_frames\":{},\"eof_errors\":{},\"error_passive\":{},\"bus_off\":{},\"fifo_overruns\":{},\"guardian_cuts\":{},\"doubled_syncs\":{},\"slot_violations\":{},\"longest_sync_gap_ms\":{},\"detect_ms\":{},\"recover_ms\":{},\"masters_at_end\":[{}],\"safe_trips\":{},\"safe_exits\":{},\"safe_at_end\":{},\"safe_expected\":{},\"goals_met\":{},\"goals_missed\":[{}]}}",
-                r.case.name,
-                r.case.scenario,
-                r.seconds,
-                r.case.ber,
-                r.case.eof,
-                r.case.drift_ppm,
-                strs(r.case.faults),
-                r.case.guardian,
-                topics.join(","),
-                null(late),
-                r.hrt_loaded_late,
-                r.srt_count,
-                r.srt_misses,
-                null(r.bad_deliveries),
-                r.transfers_dropped,
-                r.error_frames,
-                r.eof_errors,
-                r.error_passive,
-                r.bus_off,
-                r.fifo_overruns,
-                r.guardian_cuts,
-                null(r.doubled_syncs),
-                null(r.slot_violations),
-                r.longest_sync_gap_ms.map_or("null".into(), |g| format!("{g:.3}")),
-                r.detect_ms.map_or("null".into(), |g| format!("{g:.3}")),
-                r.recover_ms.map_or("null".into(), |g| format!("{g:.3}")),
-                strs(&r.masters_at_end),
-                r.safe_trips,
-                r.safe_exits,
-                r.safe_at_end,
-                r.case.safe_expected,
-                goals.is_empty(),
-                missed.join(","),
-            )
+            json!({
+                "case": r.case.name,
+                "scenario": r.case.scenario,
+                "seconds": num(r.seconds),
+                "ber": num(r.case.ber),
+                "eof_error_rate": num(r.case.eof),
+                "drift_ppm": r.case.drift_ppm,
+                "faults": r.case.faults,
+                "guardian": r.case.guardian,
+                "hrt": topics,
+                "hrt_delivered": d,
+                "hrt_late": late,
+                "hrt_lost": lost,
+                "hrt_loaded_late": r.hrt_loaded_late,
+                "srt_count": r.srt_count,
+                "srt_misses": r.srt_misses,
+                "bad_deliveries": r.bad_deliveries,
+                "transfers_dropped": r.transfers_dropped,
+                "error_frames": r.error_frames,
+                "eof_errors": r.eof_errors,
+                "error_passive": r.error_passive,
+                "bus_off": r.bus_off,
+                "fifo_overruns": r.fifo_overruns,
+                "guardian_cuts": r.guardian_cuts,
+                "doubled_syncs": r.doubled_syncs,
+                "slot_violations": r.slot_violations,
+                "longest_sync_gap_ms": ms(r.longest_sync_gap_ms),
+                "detect_ms": ms(r.detect_ms),
+                "recover_ms": ms(r.recover_ms),
+                "masters_at_end": r.masters_at_end,
+                "safe_trips": r.safe_trips,
+                "safe_exits": r.safe_exits,
+                "safe_at_end": r.safe_at_end,
+                "safe_expected": r.case.safe_expected,
+                "goals_met": goals.is_empty(),
+                "goals_missed": goals,
+            })
         })
         .collect();
-    format!("{{\"campaign\":[{}]}}\n", items.join(","))
+    format!("{}\n", json!({ "campaign": items }))
 }
 
 #[cfg(test)]
@@ -635,6 +622,8 @@ mod tests {
         let j = json(&[r]);
         assert!(j.contains("\"goals_met\":false"), "{j}");
         assert!(j.contains("\"late\":null"), "{j}");
+        let v: serde_json::Value = serde_json::from_str(&j).unwrap();
+        assert_eq!(v["campaign"][0]["hrt"][0]["name"], "a@n1");
     }
 
     #[test]

@@ -406,35 +406,35 @@ impl CpuReport {
         s
     }
 
-    /// `"cpu":{...}` member for a JSON object (empty without a model).
-    pub fn json_member(&self) -> String {
+    /// The `cpu` object of a JSON report (`None` without a model).
+    pub fn json_value(&self) -> Option<serde_json::Value> {
         if self.modules.is_empty() {
-            return String::new();
+            return None;
         }
-        let mods: Vec<String> = self
+        let mods: Vec<serde_json::Value> = self
             .modules
             .iter()
             .map(|m| {
-                format!(
-                    "{{\"name\":\"{}\",\"load\":{:.6},\"slot_to_txrq_ns\":{{\"max\":{},\"p99\":{},\"mean\":{:.1},\"samples\":{}}},\"timer_merged\":{}}}",
-                    m.name.replace('\\', "\\\\").replace('"', "\\\""),
-                    m.load,
-                    m.txrq_max_ns,
-                    m.txrq_p99_ns,
-                    m.txrq_mean_ns,
-                    m.txrq_samples,
-                    m.timer_merged
-                )
+                serde_json::json!({
+                    "name": m.name,
+                    "load": crate::report::num(m.load),
+                    "slot_to_txrq_ns": {
+                        "max": m.txrq_max_ns,
+                        "p99": m.txrq_p99_ns,
+                        "mean": crate::report::num(m.txrq_mean_ns),
+                        "samples": m.txrq_samples,
+                    },
+                    "timer_merged": m.timer_merged,
+                })
             })
             .collect();
-        format!(
-            ",\"cpu\":{{\"design\":\"{}\",\"cpi\":{},\"clock_hz\":{},\"cost\":\"{}\",\"modules\":[{}]}}",
-            self.design,
-            self.cpi,
-            self.clock_hz,
-            self.cost,
-            mods.join(",")
-        )
+        Some(serde_json::json!({
+            "design": self.design.to_string(),
+            "cpi": crate::report::num(self.cpi),
+            "clock_hz": self.clock_hz,
+            "cost": self.cost.to_string(),
+            "modules": mods,
+        }))
     }
 }
 

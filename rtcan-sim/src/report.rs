@@ -1,5 +1,9 @@
-//! Terminal tables and JSON (hand-written: the fields are documented in docs/SIM.md).
+//! Terminal tables and JSON (serde_json values; the fields are documented in
+//! docs/SIM.md). Numbers keep their full precision: a ratio of 2 misses in 5 623 is
+//! 0.00035567... in the JSON, not a rounded 0.000.
 use std::fmt::Write as _;
+
+use serde_json::{json, Value};
 
 use crate::compare::{mean_latency_ns, miss_ratio, on_time, Comparison};
 use crate::run::Run;
@@ -114,110 +118,119 @@ pub fn comparison_text(c: &Comparison) -> String {
     s
 }
 
-pub(crate) fn json_str(s: &str) -> String {
-    let mut o = String::from("\"");
-    for ch in s.chars() {
-        match ch {
-            '"' => o.push_str("\\\""),
-            '\\' => o.push_str("\\\\"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(o, "\\u{:04x}", c as u32);
-            }
-            c => o.push(c),
-        }
-    }
-    o.push('"');
-    o
-}
-
-pub(crate) fn num(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.3}")
-    } else {
-        "null".into()
-    }
+/// A number as JSON at full precision (shortest text that reads back the same f64);
+/// NaN and infinities, which JSON cannot hold, as null.
+pub(crate) fn num(x: f64) -> Value {
+    serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)
 }
 
 /// JSON object of one run.
-pub fn run_json(run: &Run) -> String {
+pub fn run_value(run: &Run) -> Value {
     let f = &run.figures;
-    let hrt: Vec<String> = f
+    let hrt: Vec<Value> = f
         .hrt
         .iter()
         .map(|h| {
-            format!(
-                "{{\"name\":{},\"count\":{},\"misses\":{},\"late\":{},\"missed\":{},\"max_response_us\":{},\"mean_period_us\":{},\"std_period_us\":{},\"jitter_min_us\":{},\"jitter_max_us\":{}}}",
-                json_str(&h.name),
-                h.count,
-                h.misses,
-                h.late.map_or("null".into(), |v| v.to_string()),
-                h.missed.map_or("null".into(), |v| v.to_string()),
-                h.max_response_ns
-                    .map_or("null".into(), |r| num(us(r as f64))),
-                num(us(h.mean_period_ns)),
-                num(us(h.std_period_ns)),
-                num(us(h.jitter_min_ns as f64)),
-                num(us(h.jitter_max_ns as f64))
-            )
+            json!({
+                "name": h.name,
+                "count": h.count,
+                "misses": h.misses,
+                "late": h.late,
+                "missed": h.missed,
+                "max_response_us": h.max_response_ns.map_or(Value::Null, |r| num(us(r as f64))),
+                "mean_period_us": num(us(h.mean_period_ns)),
+                "std_period_us": num(us(h.std_period_ns)),
+                "jitter_min_us": num(us(h.jitter_min_ns as f64)),
+                "jitter_max_us": num(us(h.jitter_max_ns as f64)),
+            })
         })
         .collect();
-    let srt: Vec<String> = f
+    let srt: Vec<Value> = f
         .srt
         .iter()
         .map(|c| {
-            format!(
-                "{{\"class\":{},\"count\":{},\"misses\":{},\"miss_ratio\":{},\"mean_ms\":{},\"p95_ms\":{},\"max_ms\":{}}}",
-                json_str(&c.name),
-                c.count,
-                c.misses,
-                num(c.miss_ratio()),
-                num(c.mean_ns() / 1e6),
-                num(c.percentile_ns(95.0) as f64 / 1e6),
-                num(c.max_ns() as f64 / 1e6)
-            )
+            json!({
+                "class": c.name,
+                "count": c.count,
+                "misses": c.misses,
+                "miss_ratio": num(c.miss_ratio()),
+                "mean_ms": num(c.mean_ns() / 1e6),
+                "p95_ms": num(c.percentile_ns(95.0) as f64 / 1e6),
+                "max_ms": num(c.max_ns() as f64 / 1e6),
+            })
         })
         .collect();
     let l = &f.load;
-    format!(
-        "{{\"policy\":{},\"hrt\":[{}],\"srt\":[{}],\"load\":{{\"sync\":{},\"hrt\":{},\"srt\":{},\"nrt\":{},\"errors\":{}}},\"slot_overlaps\":{},\"error_frames\":{},\"unattributed_frames\":{},\"delivered_ok\":{},\"delivered_bad\":{}{}}}",
-        json_str(run.policy),
-        hrt.join(","),
-        srt.join(","),
-        num(l.sync),
-        num(l.hrt),
-        num(l.srt),
-        num(l.nrt),
-        num(l.errors),
-        run.overlaps,
-        run.bus.error_frames,
-        f.unknown_frames,
-        run.rx_ok,
-        run.rx_bad,
-        run.cpu.json_member()
-    )
+    let mut v = json!({
+        "policy": run.policy,
+        "hrt": hrt,
+        "srt": srt,
+        "load": {
+            "sync": num(l.sync),
+            "hrt": num(l.hrt),
+            "srt": num(l.srt),
+            "nrt": num(l.nrt),
+            "errors": num(l.errors),
+        },
+        "slot_overlaps": run.overlaps,
+        "error_frames": run.bus.error_frames,
+        "unattributed_frames": f.unknown_frames,
+        "delivered_ok": run.rx_ok,
+        "delivered_bad": run.rx_bad,
+    });
+    if let (Some(cpu), Some(o)) = (run.cpu.json_value(), v.as_object_mut()) {
+        o.insert("cpu".into(), cpu);
+    }
+    v
+}
+
+/// JSON text of one run.
+pub fn run_json(run: &Run) -> String {
+    run_value(run).to_string()
 }
 
 /// JSON object of a comparison.
-pub fn comparison_json(c: &Comparison) -> String {
-    let runs: Vec<String> = c
+pub fn comparison_value(c: &Comparison) -> Value {
+    let runs: Vec<Value> = c
         .runs
         .iter()
         .map(|r| {
-            let body = run_json(r);
-            let extra = format!(
-                ",\"srt_on_time\":{},\"srt_miss_ratio\":{},\"srt_mean_latency_ms\":{}}}",
-                on_time(r),
-                num(miss_ratio(r)),
-                num(mean_latency_ns(r) / 1e6)
-            );
-            format!("{}{}", body.strip_suffix('}').unwrap_or(&body), extra)
+            let mut v = run_value(r);
+            if let Some(o) = v.as_object_mut() {
+                o.insert("srt_on_time".into(), on_time(r).into());
+                o.insert("srt_miss_ratio".into(), num(miss_ratio(r)));
+                o.insert("srt_mean_latency_ms".into(), num(mean_latency_ns(r) / 1e6));
+            }
+            v
         })
         .collect();
-    format!(
-        "{{\"load_scale\":{},\"offered_fraction_of_free_windows\":{},\"free_window_fraction_of_bus\":{},\"policies\":[{}]}}",
-        num(c.load),
-        num(c.offered_fraction),
-        num(c.window_fraction),
-        runs.join(",")
-    )
+    json!({
+        "load_scale": num(c.load),
+        "offered_fraction_of_free_windows": num(c.offered_fraction),
+        "free_window_fraction_of_bus": num(c.window_fraction),
+        "policies": runs,
+    })
+}
+
+/// JSON text of a comparison.
+pub fn comparison_json(c: &Comparison) -> String {
+    comparison_value(c).to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_keep_their_precision() {
+        // Issue 13: 2 misses of 5 623 printed as 0.000 with three decimals.
+        let r = 2.0 / 5623.0;
+        let text = num(r).to_string();
+        assert_eq!(text.parse::<f64>().unwrap(), r, "{text}");
+        assert_eq!(text, "0.00035568202027387515");
+        assert_eq!(num(0.1).to_string(), "0.1");
+        assert_eq!(num(100.0).to_string(), "100.0");
+        assert_eq!(num(f64::NAN), Value::Null);
+        assert_eq!(num(f64::INFINITY), Value::Null);
+    }
 }

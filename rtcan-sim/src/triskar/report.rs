@@ -4,7 +4,8 @@
 use std::fmt::Write as _;
 
 use super::TriskarRun;
-use crate::report::{json_str, num, run_json, text};
+use crate::report::{num, run_value, text};
+use serde_json::json;
 
 fn s(ns: u64) -> f64 {
     ns as f64 / 1e9
@@ -145,88 +146,96 @@ pub fn triskar_text(r: &TriskarRun) -> String {
 
 /// JSON report (fields in docs/SIM.md).
 pub fn triskar_json(r: &TriskarRun, speed_x: f64) -> String {
+    triskar_value(r, speed_x).to_string()
+}
+
+/// JSON report as a value.
+pub fn triskar_value(r: &TriskarRun, speed_x: f64) -> serde_json::Value {
     let c = &r.config;
-    let path: Vec<String> = r
+    let path: Vec<serde_json::Value> = r
         .path
         .iter()
         .map(|p| {
-            format!(
-                "{{\"t\":{},\"x\":{},\"y\":{},\"theta\":{},\"vx\":{},\"gap\":{},\"teleop_vx\":{},\"velocity_vx\":{}}}",
-                num(s(p.t_ns)),
-                num(p.pose.x),
-                num(p.pose.y),
-                num(p.pose.theta),
-                num(p.vx),
-                num(p.gap_m),
-                num(f64::from(p.cmd_vx)),
-                num(f64::from(p.velocity_vx))
-            )
+            json!({
+                "t": num(s(p.t_ns)),
+                "x": num(p.pose.x),
+                "y": num(p.pose.y),
+                "theta": num(p.pose.theta),
+                "vx": num(p.vx),
+                "gap": num(p.gap_m),
+                "teleop_vx": num(f64::from(p.cmd_vx)),
+                "velocity_vx": num(f64::from(p.velocity_vx)),
+            })
         })
         .collect();
-    let modules: Vec<String> = r
+    let modules: Vec<serde_json::Value> = r
         .modules
         .iter()
         .map(|m| {
             let k = &m.counters;
-            format!(
-                "{{\"name\":{},\"synced\":{},\"safe_trips\":{},\"safe_now\":{},\"counters\":{{\"rx_delivered\":{},\"tx_frames\":{},\"tx_aborted\":{},\"tx_failed\":{},\"deadline_missed\":{},\"queue_full\":{},\"hrt_empty\":{},\"hrt_late\":{},\"sync_missed\":{},\"rx_overrun\":{},\"rx_errors\":{}}},\"wheel_rad_s\":{}}}",
-                json_str(m.name),
-                m.synced,
-                m.safe_trips,
-                m.safe_now,
-                k.rx_delivered,
-                k.tx_frames,
-                k.tx_aborted,
-                k.tx_failed,
-                k.deadline_missed,
-                k.queue_full,
-                k.hrt_empty,
-                k.hrt_late,
-                k.sync_missed,
-                k.rx_overrun,
-                k.rx_unknown_id + k.rx_bad_dlc + k.rx_out_of_order + k.rx_other_transfer + k.rx_incomplete
-                    + k.rx_bad_size + k.rx_bad_sync + k.rx_bad_heartbeat,
-                m.motor.map_or("null".into(), |(w, _)| num(f64::from(w)))
-            )
+            json!({
+                "name": m.name,
+                "synced": m.synced,
+                "safe_trips": m.safe_trips,
+                "safe_now": m.safe_now,
+                "counters": {
+                    "rx_delivered": k.rx_delivered,
+                    "tx_frames": k.tx_frames,
+                    "tx_aborted": k.tx_aborted,
+                    "tx_failed": k.tx_failed,
+                    "deadline_missed": k.deadline_missed,
+                    "queue_full": k.queue_full,
+                    "hrt_empty": k.hrt_empty,
+                    "hrt_late": k.hrt_late,
+                    "sync_missed": k.sync_missed,
+                    "rx_overrun": k.rx_overrun,
+                    "rx_errors": k.rx_unknown_id + k.rx_bad_dlc + k.rx_out_of_order
+                        + k.rx_other_transfer + k.rx_incomplete + k.rx_bad_size
+                        + k.rx_bad_sync + k.rx_bad_heartbeat,
+                },
+                "wheel_rad_s": m.motor.map_or(serde_json::Value::Null, |(w, _)| num(f64::from(w))),
+            })
         })
         .collect();
-    format!(
-        "{{\"scenario\":\"triskar2\",\"seconds\":{},\"seed\":{},\"wall_x\":{},\"command_vx\":{},\"command_from_s\":{},\"command_until_s\":{},\"gateway_dies_at_s\":{},\"run\":{},\"robot\":{{\"max_x\":{},\"min_gap\":{},\"final_gap\":{},\"stopped_short\":{},\"overrides\":{},\"odometry_rx\":{},\"path\":[{}]}},\"modules\":[{}],\"faults\":[{}],\"guardian\":{},\"sync\":{{\"syncs\":{},\"doubled_syncs\":{},\"longest_sync_gap_ms\":{},\"slot_violations\":{},\"slots_checked\":{},\"masters_at_end\":[{}]}},\"speed_x_real_time\":{}}}",
-        c.sim.seconds,
-        c.sim.seed,
-        num(c.wall_x_m),
-        num(f64::from(c.command_vx)),
-        num(c.command_from_s),
-        num(c.command_until_s),
-        c.gateway_dies_at_s.map_or("null".into(), num),
-        run_json(&r.run),
-        num(r.max_x_m),
-        num(r.min_gap_m),
-        num(r.final_gap_m),
-        r.stopped_short(),
-        r.overrides,
-        r.odometry_rx,
-        path.join(","),
-        modules.join(","),
-        c.faults
-            .iter()
-            .map(|f| format!("\"{}\"", json_str(&f.spec(&super::MODULES))))
-            .collect::<Vec<_>>()
-            .join(","),
-        c.guardian,
-        r.syncs.syncs,
-        r.syncs.doubled,
-        num(r.syncs.longest_gap.0 as f64 / 1e6),
-        r.slots_live.0,
-        r.slots_live.1,
-        r.modules
-            .iter()
-            .filter(|m| m.master)
-            .map(|m| format!("\"{}\"", m.name))
-            .collect::<Vec<_>>()
-            .join(","),
-        num(speed_x)
-    )
+    let faults: Vec<String> = c.faults.iter().map(|f| f.spec(&super::MODULES)).collect();
+    let masters: Vec<&str> = r
+        .modules
+        .iter()
+        .filter(|m| m.master)
+        .map(|m| m.name)
+        .collect();
+    json!({
+        "scenario": "triskar2",
+        "seconds": c.sim.seconds,
+        "seed": c.sim.seed,
+        "wall_x": num(c.wall_x_m),
+        "command_vx": num(f64::from(c.command_vx)),
+        "command_from_s": num(c.command_from_s),
+        "command_until_s": num(c.command_until_s),
+        "gateway_dies_at_s": c.gateway_dies_at_s.map_or(serde_json::Value::Null, num),
+        "run": run_value(&r.run),
+        "robot": {
+            "max_x": num(r.max_x_m),
+            "min_gap": num(r.min_gap_m),
+            "final_gap": num(r.final_gap_m),
+            "stopped_short": r.stopped_short(),
+            "overrides": r.overrides,
+            "odometry_rx": r.odometry_rx,
+            "path": path,
+        },
+        "modules": modules,
+        "faults": faults,
+        "guardian": c.guardian,
+        "sync": {
+            "syncs": r.syncs.syncs,
+            "doubled_syncs": r.syncs.doubled,
+            "longest_sync_gap_ms": num(r.syncs.longest_gap.0 as f64 / 1e6),
+            "slot_violations": r.slots_live.0,
+            "slots_checked": r.slots_live.1,
+            "masters_at_end": masters,
+        },
+        "speed_x_real_time": num(speed_x),
+    })
 }
 
 /// Top view of the path (x, y in m) with the wall and the final footprint.
