@@ -1,5 +1,6 @@
 //! The `rtcan` command. One file per subcommand; this file only dispatches.
 mod bridge;
+mod call;
 mod check;
 mod decode;
 mod echo;
@@ -36,6 +37,10 @@ commands:
   param (list | get <node.name> | set <node.name> <value>) [--sim robot.toml] [--json]
                                 module parameters, range-checked by the module
                                 (docs/SERVICES.md); exit 1 when refused
+  call SERVICE JSON [--sim robot.toml] [--json]
+                                one request/reply call of a robot.toml service on the
+                                simulated robot; prints the reply (docs/SERVICES.md);
+                                exit 1 on timeout, 2 on bad input
   help                          this text
 ";
 
@@ -67,6 +72,7 @@ fn run(args: &[String]) -> i32 {
             0
         }
         "param" => param::run(rest),
+        "call" => call::run(rest),
         "help" | "-h" | "--help" => {
             print!("{USAGE}");
             0

@@ -34,6 +34,8 @@ pub struct Shared {
     pub log_rx: u32,
     /// Last log line text received by the gateway.
     pub last_log: String,
+    /// The `proximity_read` service: script, calls, answers (`services.rs`).
+    pub services: super::services::ServiceLog,
 }
 
 /// What the host (ROS) sends through the gateway.
@@ -300,6 +302,8 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     /// SRT topics to log: tx index and how to read the topic's publication count.
     pub srt: Vec<SrtCounter>,
     pub srt_log: Vec<(u8, SrtLog)>,
+    /// The module's part in a request/reply service, run after its app.
+    pub service: Option<Box<dyn super::services::ServiceHook>>,
     was_ok: bool,
     trips: u32,
     exits: u32,
@@ -339,6 +343,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 .map(|(tx, f)| (tx, f, TopicStats::default()))
                 .collect(),
             srt_log,
+            service: None,
             was_ok: false,
             trips: 0,
             exits: 0,
@@ -397,6 +402,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         self.app = (boot.app)();
         self.was_ok = false;
         self.reboots += 1;
+        if let Some(svc) = self.service.as_mut() {
+            svc.reboot(&mut self.shared.borrow_mut());
+        }
         // The topics' counters start again from zero; what was pending died with it.
         for (tx, _, seen) in self.srt.iter_mut() {
             *seen = TopicStats::default();
@@ -422,7 +430,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         }
         let global = self.clock.global_at(now);
         let motor = self.motor_index();
-        let app_next = {
+        let (app_next, svc_next) = {
             let mut shared = self.shared.borrow_mut();
             shared.physics.advance_to(global);
             let mut hw = PlantHw {
@@ -430,8 +438,14 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 global,
                 motor,
             };
-            self.app.poll(now, &mut hw)
+            let next = self.app.poll(now, &mut hw);
+            let svc = self
+                .service
+                .as_mut()
+                .and_then(|s| s.poll(now, global, &mut shared));
+            (next, svc)
         };
+        let app_next = svc_next.map_or(app_next, |s| s.min(app_next));
         for (k, (tx, stats, seen)) in self.srt.iter_mut().enumerate() {
             let now_stats = stats();
             if let Some((_, log)) = self.srt_log.get_mut(k).filter(|l| l.0 == *tx) {
@@ -481,6 +495,13 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
     ) -> Option<Nanos> {
         if let Err(wake) = self.alive(now, can) {
             return wake;
+        }
+        let lost = self
+            .service
+            .as_mut()
+            .is_some_and(|s| s.lose(frame, &mut self.shared.borrow_mut()));
+        if lost {
+            return self.run(now, can);
         }
         self.engine.on_rx(frame, sof, can, &mut self.host);
         self.run(now, can)
