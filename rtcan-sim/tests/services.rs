@@ -48,6 +48,7 @@ fn script(period_ms: u64, burst: usize) -> ServiceScript {
         burst,
         from_ns: 1000 * MS,
         lose_replies: Vec::new(),
+        request: None,
     }
 }
 
