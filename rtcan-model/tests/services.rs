@@ -239,3 +239,55 @@ fn bad_services_are_rustc_style_errors_with_a_hint() {
         }
     }
 }
+
+#[test]
+fn wrong_value_kinds_are_errors_never_panics() {
+    let cases: &[(&str, &str)] = &[
+        ("services = 3\n", "error[wrong-type]: `services` must be a table, found an integer"),
+        ("[services]\nread = 5\n", "error[wrong-type]: `services.read` must be a table"),
+        (
+            &format!("[services.read]\n{}", OK.replace("request = { sensor = \"u8\" }", "request = 3")),
+            "error[wrong-type]: `services.read.request` must be a type name or a field table, found an integer",
+        ),
+        (
+            &format!("[services.read]\n{}", OK.replace("server = \"ir_ranger\"", "server = 5")),
+            "error[wrong-type]: `services.read.server` must be a node name (a string)",
+        ),
+        (
+            &format!("[services.read]\n{}", OK.replace("timeout = \"20ms\"", "timeout = 20")),
+            "error[wrong-type]: `services.read.timeout` must be a duration string",
+        ),
+        (
+            &format!("[services.read]\n{OK}in_flight = \"2\"\n"),
+            "error[bad-value]: `services.read.in_flight` must be an integer 1..=8",
+        ),
+        (
+            &format!("[services.read]\n{OK}rate = 1\n"),
+            "error[wrong-type]: `services.read.rate` must be a frequency string",
+        ),
+        (
+            &format!("[services.read]\n{OK}rate = \"fast\"\n"),
+            "error[bad-value]: `services.read.rate`:",
+        ),
+        (
+            &format!("[services.read]\n{}", OK.replace("{ sensor = \"u8\" }", "{ sensor = 1 }")),
+            "error[wrong-type]: `services.read.request`: field `sensor` must be a type string",
+        ),
+        (
+            &format!("[services.read]\n{}", OK.replace("{ sensor = \"u8\" }", "{ Sensor = \"u8\" }")),
+            "error[bad-name]: `services.read.request`: field name `Sensor` is not a valid name",
+        ),
+    ];
+    for (extra, want) in cases {
+        // A top-level key must come before the first table to be top-level.
+        let e = if extra.starts_with("services =") {
+            analyze("robot.toml", &format!("{extra}{}", without_services()))
+                .diagnostics
+                .render()
+        } else {
+            errors(extra)
+        };
+        assert!(e.contains(want), "want `{want}` in:\n{e}");
+        assert!(e.contains("help:"), "no hint:\n{e}");
+    }
+}
