@@ -307,6 +307,7 @@ fn every_robot_check_admits_builds() {
         "robots/rtcan-paper.toml",
         "robots/hrt200.toml",
         "tests/robots/codec.toml",
+        "robots/services.toml",
     ] {
         assert!(admitted.contains(&root().join(must)), "{must} not admitted");
     }

@@ -216,13 +216,17 @@ fn module_tables_equal_the_plan_and_the_macro_output() {
         robot::motor2::TABLES.calendar
     );
     // Engine sizes: motor1 receives `velocity` (12 B) only; the gateway receives
-    // odometry (24), proximity (8), battery (5), log (32).
+    // odometry (24), proximity (8), battery (5), log (32) and the `proximity_read`
+    // service's reply frames (5: call number + sensor + range).
     assert_eq!(
         (robot::motor1::RX_COUNT, robot::motor1::ARENA_BYTES),
         (1, 12)
     );
-    assert_eq!(robot::gateway::RX_COUNT, 4);
-    assert_eq!(robot::gateway::ARENA_BYTES, 24 + 8 + 5 + 32);
+    assert_eq!(robot::gateway::RX_COUNT, 5);
+    assert_eq!(robot::gateway::ARENA_BYTES, 24 + 8 + 5 + 32 + 5);
+    // The gateway sends proximity_read requests (SRT, queue of in_flight = 2) besides
+    // teleop (queue 2) and its heartbeat.
+    assert_eq!(robot::gateway::QUEUE_CAPACITY, 1 + 2 + 2);
     // psu sends battery and log (NRT, queues 1 and 4) and its heartbeat.
     assert_eq!(robot::psu::QUEUE_CAPACITY, 1 + 1 + 4);
     assert_eq!(

@@ -4,6 +4,7 @@
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 mod bridge;
+mod call;
 mod check;
 mod decode;
 mod echo;
@@ -103,6 +104,13 @@ enum Cmd {
     /// request frames, simulated bus time, retries and the result. Exit 0 every update
     /// committed, 1 one failed, 2 bad input.
     Flash(flash::Args),
+    /// One request/reply call of a robot.toml service (docs/SERVICES.md)
+    ///
+    /// On the simulated robot (--sim, the default; its node code is compiled from the
+    /// workspace robot), e.g. rtcan call proximity_read '{"sensor":2}'. Prints the reply
+    /// (--json: service, call, request, reply or null, outcome, latency_ns). Exit 0
+    /// replied, 1 timed out or refused, 2 bad input.
+    Call(call::Args),
 }
 
 fn dispatch(cmd: Cmd) -> i32 {
@@ -117,6 +125,7 @@ fn dispatch(cmd: Cmd) -> i32 {
         Cmd::Bridge(a) => bridge::run(a),
         Cmd::Param(a) => param::run(a),
         Cmd::Flash(a) => flash::run(a),
+        Cmd::Call(a) => call::run(a),
     }
 }
 

@@ -377,6 +377,16 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
     Ok(())
 }
 
+/// The triskar2 JSON object with a `services` member added (per service: calls,
+/// replies, timeouts, late, busy, server_absent, latency_max_ns, latency_mean_ns).
+fn with_services(json: &str, log: &rtcan_sim::triskar::services::ServiceLog) -> String {
+    let body = json.trim_end().strip_suffix('}').unwrap_or(json);
+    format!(
+        "{body},\"services\":{}}}",
+        rtcan_sim::triskar::services::json(log)
+    )
+}
+
 fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
     let cfg = &a.req.cfg;
     match rep {
@@ -487,23 +497,26 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
             scenario,
             cfg,
             speed,
+            services,
         } => {
             let x = speed.x_real_time();
+            let json = with_services(&triskar_report::triskar_json(result, x), services);
             if a.json {
-                emit(&format!("{}\n", triskar_report::triskar_json(result, x)));
+                emit(&format!("{json}\n"));
             } else {
                 emit(&format!(
-                    "triskar2 on {file}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n\n{}\n{}\n",
+                    "triskar2 on {file}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n\n{}\n{}\n{}\n",
                     cfg.seconds,
                     cfg.seed,
                     triskar_report::triskar_text(result),
+                    rtcan_sim::triskar::services::text(services),
                     speed_line(speed)
                 ));
             }
             if let Some(dir) = &a.out {
                 outputs(dir, scenario, &result.run)?;
                 write(dir, "path.svg", &triskar_report::path_svg(result))?;
-                write(dir, "report.json", &triskar_report::triskar_json(result, x))?;
+                write(dir, "report.json", &json)?;
             }
         }
         Report::Campaign { rows, speed } => {

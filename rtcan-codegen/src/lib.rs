@@ -24,6 +24,7 @@ mod lit;
 mod message;
 mod module;
 mod names;
+mod services;
 mod tables;
 
 use proc_macro2::TokenStream;

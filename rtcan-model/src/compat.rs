@@ -122,8 +122,12 @@ pub fn images_to_change(old: &Plan, new: &Plan) -> Vec<ImageChange> {
         if ot.master_masks != nt.master_masks {
             reasons.push("master reservation masks changed".to_string());
         }
-        let ob = old.modules.get(oi).map(|m| &m.banks);
-        if ob != Some(&nm.banks) {
+        // The hardware filters only: a bank's purpose names topics by plan index, which
+        // shifts when a topic is added before others (e.g. before the service topics).
+        let filters =
+            |m: &crate::plan::ModulePlan| m.banks.iter().map(|b| b.filter).collect::<Vec<_>>();
+        let ob = old.modules.get(oi).map(filters);
+        if ob != Some(filters(nm)) {
             reasons.push("CAN filter banks changed".to_string());
         }
         if reasons.is_empty() && ot != nt {

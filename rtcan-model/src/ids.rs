@@ -38,11 +38,26 @@ fn module_name(model: &Model, m: usize) -> &str {
 }
 
 /// Message ID of every topic (indexed like `model.topics`), or `None` if they do not fit
-/// in the 16-bit ID space.
+/// in the 16-bit ID space. Service topics (`[services]`) are numbered after every
+/// declared topic, local ones included, so adding a service moves no existing ID.
 pub fn assign(model: &Model) -> Option<Vec<u16>> {
+    let mut ids = vec![0u16; model.topics.len()];
+    let (declared, services): (Vec<usize>, Vec<usize>) =
+        (0..model.topics.len()).partition(|i| !model.is_service_topic(*i));
+    let cursor = place(model, &declared, u32::from(FIRST_TOPIC_MSG_ID), &mut ids)?;
+    place(model, &services, cursor, &mut ids)?;
+    Some(ids)
+}
+
+/// Numbers `topics` from `cursor`: the bus groups in aligned blocks, then the local
+/// topics; returns the next free ID.
+fn place(model: &Model, topics: &[usize], mut cursor: u32, ids: &mut [u16]) -> Option<u32> {
     let mut groups: BTreeMap<Vec<&str>, Vec<usize>> = BTreeMap::new();
     let mut local = Vec::new();
-    for (i, t) in model.topics.iter().enumerate() {
+    for &i in topics {
+        let Some(t) = model.topics.get(i) else {
+            continue;
+        };
         if model.on_bus(t) {
             let key = receivers(model, i)
                 .into_iter()
@@ -73,9 +88,6 @@ pub fn assign(model: &Model) -> Option<Vec<u16>> {
             .cmp(&a.1.len().next_power_of_two())
             .then(a.0.cmp(&b.0))
     });
-
-    let mut ids = vec![0u16; model.topics.len()];
-    let mut cursor = u32::from(FIRST_TOPIC_MSG_ID);
     for (_, members) in &groups {
         let size = members.len().next_power_of_two() as u32;
         let base = cursor.div_ceil(size) * size;
@@ -89,5 +101,5 @@ pub fn assign(model: &Model) -> Option<Vec<u16>> {
         *ids.get_mut(t)? = u16::try_from(cursor).ok()?;
         cursor += 1;
     }
-    Some(ids)
+    Some(cursor)
 }

@@ -29,6 +29,7 @@ pub mod params;
 pub mod plan;
 pub mod report;
 pub mod schedule;
+pub mod services;
 pub mod syntax;
 pub mod timing;
 pub mod units;
@@ -145,6 +146,9 @@ pub fn analyze_locked(file: &str, source: &str, lock: Option<(&str, &str)>) -> A
             }
             if let (Some(m), syntax::Kind::Table(entries)) = (&model, &root.kind) {
                 params::validate(entries, m, &mut items);
+            }
+            if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
+                services::validate(entries, m, &mut items);
             }
             if let Some(m) = &model {
                 plan = plan::build_locked(m, file, lock.as_ref(), &mut items);

@@ -330,9 +330,18 @@ pub struct Model {
     pub topics: Vec<Topic>,
     /// `[robot]` and the topics' outside-world keys (`rtcan_model::bridge_keys`).
     pub bridge: crate::bridge_keys::BridgeDecl,
+    /// `[services]` (rtcan_model::services): their topics and types are appended after
+    /// the declared ones.
+    pub services: Vec<crate::services::Service>,
 }
 
 impl Model {
+    /// True for the request and reply topics of a service.
+    pub fn is_service_topic(&self, topic: usize) -> bool {
+        self.services
+            .iter()
+            .any(|s| s.request_topic == topic || s.reply_topic == topic)
+    }
     /// Payload size of a topic.
     pub fn topic_size(&self, topic: &Topic) -> usize {
         self.types.get(topic.ty).map_or(0, |t| t.size)

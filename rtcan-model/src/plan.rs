@@ -200,6 +200,8 @@ pub struct Plan {
     pub moves: Vec<crate::lock::Move>,
     /// End-to-end chains with their bounds (`[chains]`; filled by `analyze`).
     pub chains: Vec<crate::chains::ChainBound>,
+    /// Request/reply services (`[services]`); their topics are in `topics`.
+    pub services: Vec<crate::services::Service>,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -247,6 +249,10 @@ impl Plan {
     /// A topic by name.
     pub fn topic(&self, name: &str) -> Option<&TopicPlan> {
         self.topics.iter().find(|t| t.name == name)
+    }
+    /// A service by name.
+    pub fn service(&self, name: &str) -> Option<&crate::services::Service> {
+        self.services.iter().find(|s| s.name == name)
     }
     /// A module by name.
     pub fn module(&self, name: &str) -> Option<&ModulePlan> {
@@ -714,6 +720,7 @@ pub fn build_locked(
         lineage: lock.map(|l| l.lineage),
         moves,
         chains: Vec::new(),
+        services: model.services.clone(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)

@@ -15,7 +15,7 @@ use rtcan_core::timing::{bits_to_ns, worst_case_bits};
 use rtcan_core::Class;
 
 const TOP_KEYS: &[&str] = &[
-    "bus", "types", "modules", "nodes", "topics", "sim", "params", "robot", "chains",
+    "bus", "types", "modules", "nodes", "topics", "sim", "params", "robot", "chains", "services",
 ];
 const BUS_KEYS: &[&str] = &[
     "bitrate",
@@ -422,6 +422,7 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
         nodes,
         topics,
         bridge: crate::bridge_keys::BridgeDecl::default(),
+        services: Vec::new(),
     })
 }
 

@@ -22,6 +22,17 @@ pub enum CallError {
     Busy,
     /// The output buffer is shorter than the framed request.
     TooLong,
+    /// The request could not be queued for sending (the call was withdrawn).
+    NotSent,
+}
+
+/// What a typed client's `poll` reports (the generated `<Service>Client`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Event<R> {
+    /// The reply to a call, in time.
+    Reply(CallId, R),
+    /// A call got no reply before its timeout.
+    TimedOut(CallId),
 }
 
 /// What became of a call.
@@ -42,6 +53,8 @@ pub struct ClientCounters {
     /// Replies too short to carry a call number.
     pub malformed: u32,
     pub busy: u32,
+    /// Calls withdrawn because their request could not be sent (`cancel`).
+    pub not_sent: u32,
 }
 
 /// The client side of one service with at most `N` calls in flight.
@@ -69,6 +82,7 @@ impl<const N: usize> Client<N> {
                 late_or_unknown: 0,
                 malformed: 0,
                 busy: 0,
+                not_sent: 0,
             },
         }
     }
@@ -138,6 +152,42 @@ impl<const N: usize> Client<N> {
                 }
             }
         }
+    }
+
+    /// Expires the call with the earliest passed deadline, if any (one at a time, for a
+    /// caller that reports each timeout as an event).
+    pub fn expire_one(&mut self, now: Nanos) -> Option<CallId> {
+        let slot = self
+            .pending
+            .iter_mut()
+            .filter(|p| p.is_some_and(|(_, d)| now >= d))
+            .min_by_key(|p| p.map_or(Nanos::MAX, |(_, d)| d))?;
+        let (id, _) = slot.take()?;
+        self.counters.timeouts = self.counters.timeouts.saturating_add(1);
+        self.consecutive_timeouts = self.consecutive_timeouts.saturating_add(1);
+        Some(CallId(id))
+    }
+
+    /// Withdraws a call whose request could not be sent (e.g. the queue towards the
+    /// engine was full): not a timeout, counted as `not_sent`. False if not in flight.
+    pub fn cancel(&mut self, id: CallId) -> bool {
+        match self
+            .pending
+            .iter_mut()
+            .find(|p| p.is_some_and(|(i, _)| i == id.0))
+        {
+            Some(p) => {
+                *p = None;
+                self.counters.not_sent = self.counters.not_sent.saturating_add(1);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The timeout every call gets (ns).
+    pub fn timeout(&self) -> Nanos {
+        self.timeout
     }
 
     /// Calls in flight.
@@ -254,6 +304,24 @@ mod tests {
         assert!(!c.server_absent());
         assert_eq!(c.counters.calls, 6);
         assert_eq!(c.counters.replies, 3);
+    }
+
+    #[test]
+    fn expire_one_takes_the_earliest_passed_deadline_and_cancel_is_not_a_timeout() {
+        let mut c = Client::<3>::new(10);
+        let mut f = [0u8; 2];
+        let (a, _) = c.call(5, &[], &mut f).unwrap();
+        let (b, _) = c.call(0, &[], &mut f).unwrap();
+        let (d, _) = c.call(7, &[], &mut f).unwrap();
+        assert_eq!(c.expire_one(9), None);
+        assert!(c.cancel(d));
+        assert!(!c.cancel(d));
+        assert_eq!(c.expire_one(20), Some(b));
+        assert_eq!(c.expire_one(20), Some(a));
+        assert_eq!(c.expire_one(20), None);
+        assert_eq!((c.counters.timeouts, c.counters.not_sent), (2, 1));
+        assert_eq!(c.in_flight(), 0);
+        assert_eq!(c.timeout(), 10);
     }
 
     #[test]

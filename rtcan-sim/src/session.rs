@@ -192,6 +192,8 @@ pub enum Report {
         cfg: SimConfig,
         /// Speed.
         speed: Speed,
+        /// The `proximity_read` service: the gateway called it at its declared rate.
+        services: Box<crate::triskar::services::ServiceLog>,
     },
 }
 
@@ -380,7 +382,10 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             if !req.seconds_given {
                 cfg.sim.seconds = TriskarConfig::default().sim.seconds;
             }
-            let (result, speed) = timed(cfg.sim.seconds, || triskar::run(&plan, &cfg))?;
+            let script = triskar::services::ServiceScript::from_plan(&plan);
+            let ((result, services), speed) = timed(cfg.sim.seconds, || {
+                triskar::run_with_services(&plan, &cfg, &script)
+            })?;
             let scenario = robot::scenario(&plan, &[])?;
             Ok(Report::Triskar {
                 file: plan.file.clone(),
@@ -388,6 +393,7 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
                 scenario,
                 cfg: cfg.sim,
                 speed,
+                services: Box::new(services),
             })
         }
     }

@@ -29,6 +29,7 @@ use rtcan::pubsub::supervision::{table_bytes, ModuleTable};
 pub mod module;
 pub mod physics;
 pub mod report;
+pub mod services;
 
 use module::{App, Boot, Fate, Script, Shared, SimModule, SrtLog, TriskarModule};
 use physics::{PathSample, Physics};
@@ -194,14 +195,25 @@ pub(crate) fn reset_all() {
     rtcan::robot_toml::reset();
 }
 
-/// Runs the scenario on `plan` (which must be the workspace robot.toml).
+/// Runs the scenario on `plan` (which must be the workspace robot.toml), without
+/// service calls.
 pub fn run(plan: &Plan, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
+    run_with_services(plan, cfg, &services::ServiceScript::default()).map(|(r, _)| r)
+}
+
+/// [`run`] with the gateway calling `proximity_read` on `script`; also returns what the
+/// service did.
+pub fn run_with_services(
+    plan: &Plan,
+    cfg: &TriskarConfig,
+    script: &services::ServiceScript,
+) -> Result<(TriskarRun, services::ServiceLog), String> {
     check_plan(plan)?;
     let sc = crate::robot::scenario(plan, &[])?;
     // A panicking earlier run leaves the lock poisoned; the statics are reset anyway.
     let _guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
     reset_all();
-    let result = simulate(&sc, cfg);
+    let result = simulate(&sc, cfg, script);
     reset_all();
     result
 }
@@ -335,6 +347,7 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
             .update
             .as_ref()
             .map(|j| crate::update::UpdateBus::new(j, MODULES.len(), robot::FINGERPRINT)),
+        services: services::ServiceLog::default(),
     }))
 }
 
@@ -402,6 +415,12 @@ pub(crate) fn build_bus(
                 m.down = crate::fault::down_intervals(&faults, n)?;
                 m.index = n;
                 m.babble_from = crate::fault::babble_from(&faults, n);
+                // `proximity_read`: the gateway calls, the proximity module serves.
+                m.service = match n {
+                    0 => Some(Box::new(services::Caller::default())),
+                    4 => Some(Box::new(services::Server::default())),
+                    _ => None,
+                };
                 Box::new(m)
             }};
         }
@@ -410,9 +429,14 @@ pub(crate) fn build_bus(
                 gateway,
                 "gateway",
                 App::Gateway(app::GatewayApp::new()),
-                vec![(robot::gateway::topics::tx::TELEOP, || {
-                    robot::gateway::topics::TELEOP.stats()
-                })]
+                vec![
+                    (robot::gateway::topics::tx::TELEOP, || {
+                        robot::gateway::topics::TELEOP.stats()
+                    }),
+                    (robot::gateway::topics::tx::PROXIMITY_READ_REQUEST, || {
+                        robot::gateway::topics::PROXIMITY_READ_REQUEST.stats()
+                    })
+                ]
             ),
             1 => module!(
                 motor1,
@@ -436,9 +460,14 @@ pub(crate) fn build_bus(
                 proximity,
                 "proximity",
                 App::Proximity(app::ProximityApp::new()),
-                vec![(robot::proximity::topics::tx::VELOCITY, || {
-                    robot::proximity::topics::VELOCITY.stats()
-                })]
+                vec![
+                    (robot::proximity::topics::tx::VELOCITY, || {
+                        robot::proximity::topics::VELOCITY.stats()
+                    }),
+                    (robot::proximity::topics::tx::PROXIMITY_READ_REPLY, || {
+                        robot::proximity::topics::PROXIMITY_READ_REPLY.stats()
+                    })
+                ]
             ),
             _ => module!(psu, "psu", App::Psu(app::PsuApp::new()), Vec::new()),
         };
@@ -467,8 +496,13 @@ pub(crate) fn build_bus(
     Ok(bus)
 }
 
-fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun, String> {
+fn simulate(
+    sc: &crate::run::Scenario,
+    cfg: &TriskarConfig,
+    script: &services::ServiceScript,
+) -> Result<(TriskarRun, services::ServiceLog), String> {
     let shared = new_shared(cfg);
+    shared.borrow_mut().services.script = script.clone();
     let mut bus = build_bus(cfg, &shared)?;
     bus.set_eof_error_rate(cfg.sim.eof_error_rate);
     let faults = fault_script(cfg)?;
@@ -618,7 +652,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
     let final_gap_m = path.last().map_or(f64::INFINITY, |s| s.gap_m);
     let odometry = std::mem::take(&mut sh.odometry);
     let odometry_rx = odometry.seen();
-    Ok(TriskarRun {
+    let service_log = std::mem::take(&mut sh.services);
+    let run = TriskarRun {
         run: Run {
             policy: "ours",
             figures,
@@ -656,7 +691,8 @@ fn simulate(sc: &crate::run::Scenario, cfg: &TriskarConfig) -> Result<TriskarRun
         syncs,
         slots_live: live.map_or((0, 0), |c| (c.bad, c.checked)),
         config: cfg.clone(),
-    })
+    };
+    Ok((run, service_log))
 }
 
 /// SRT latency per topic from the publications and their fates (`SrtLog`), streamed:

@@ -36,6 +36,8 @@ pub struct Shared {
     pub last_log: String,
     /// A firmware update over the bus, if the run has one.
     pub update: Option<crate::update::UpdateBus>,
+    /// The `proximity_read` service: script, calls, answers (`services.rs`).
+    pub services: super::services::ServiceLog,
 }
 
 /// What the host (ROS) sends through the gateway.
@@ -304,6 +306,8 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     /// SRT topics to log: tx index and how to read the topic's publication count.
     pub srt: Vec<SrtCounter>,
     pub srt_log: Vec<(u8, SrtLog)>,
+    /// The module's part in a request/reply service, run after its app.
+    pub service: Option<Box<dyn super::services::ServiceHook>>,
     was_ok: bool,
     trips: u32,
     exits: u32,
@@ -344,6 +348,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 .map(|(tx, f)| (tx, f, TopicStats::default()))
                 .collect(),
             srt_log,
+            service: None,
             was_ok: false,
             trips: 0,
             exits: 0,
@@ -405,6 +410,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         if let Some(u) = self.shared.borrow_mut().update.as_mut() {
             u.power_on(self.index);
         }
+        if let Some(svc) = self.service.as_mut() {
+            svc.reboot(&mut self.shared.borrow_mut());
+        }
         // The topics' counters start again from zero; what was pending died with it.
         for (tx, _, seen) in self.srt.iter_mut() {
             *seen = TopicStats::default();
@@ -463,7 +471,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         }
         let global = self.clock.global_at(now);
         let motor = self.motor_index();
-        let app_next = {
+        let (app_next, svc_next) = {
             let mut shared = self.shared.borrow_mut();
             shared.physics.advance_to(global);
             let mut hw = PlantHw {
@@ -471,8 +479,14 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 global,
                 motor,
             };
-            self.app.poll(now, &mut hw)
+            let next = self.app.poll(now, &mut hw);
+            let svc = self
+                .service
+                .as_mut()
+                .and_then(|s| s.poll(now, global, &mut shared));
+            (next, svc)
         };
+        let app_next = svc_next.map_or(app_next, |s| s.min(app_next));
         for (k, (tx, stats, seen)) in self.srt.iter_mut().enumerate() {
             let now_stats = stats();
             if let Some((_, log)) = self.srt_log.get_mut(k).filter(|l| l.0 == *tx) {
@@ -522,6 +536,13 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
     ) -> Option<Nanos> {
         if let Err(wake) = self.alive(now, can) {
             return wake;
+        }
+        let lost = self
+            .service
+            .as_mut()
+            .is_some_and(|s| s.lose(frame, &mut self.shared.borrow_mut()));
+        if lost {
+            return self.run(now, can);
         }
         self.engine_call(now, can, |e, can, h| e.on_rx(frame, sof, can, h));
         self.run(now, can)
