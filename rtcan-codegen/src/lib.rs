@@ -24,6 +24,7 @@ mod lit;
 mod message;
 mod module;
 mod names;
+pub mod scaffold;
 mod tables;
 
 use proc_macro2::TokenStream;
