@@ -6,6 +6,7 @@ mod echo;
 mod emulate;
 mod link_args;
 mod monitor;
+mod new;
 mod out;
 mod param;
 mod pub_;
@@ -36,6 +37,11 @@ commands:
   param (list | get <node.name> | set <node.name> <value>) [--sim robot.toml] [--json]
                                 module parameters, range-checked by the module
                                 (docs/SERVICES.md); exit 1 when refused
+  new <DIR> [--robot robot.toml]
+                                write a firmware workspace for the robot: one image per
+                                module, one file per node, `cargo run -p sim`; re-running
+                                adds what is new, never overwrites node files; exit 2
+                                invalid robot (`rtcan new --help`)
   help                          this text
 ";
 
@@ -61,6 +67,7 @@ fn run(args: &[String]) -> i32 {
         "pub" => pub_::run(rest),
         "record" => record::run(rest),
         "monitor" => monitor::run(rest),
+        "new" => new::run(rest),
         "bridge" => bridge::run(rest),
         "--version" | "-V" => {
             println!("rtcan {}", env!("CARGO_PKG_VERSION"));
