@@ -67,11 +67,14 @@ impl<const RX: usize, const AR: usize, const Q: usize, A: PollApp> AppModule<RX,
         self.host.pump(&mut self.engine, now, can);
         let e = self.engine.poll(now, can, &mut self.host);
         self.host.pump(&mut self.engine, now, can);
-        Some(if e == Nanos::MAX {
+        // Nothing due (an app of subscribers only, an idle engine): no timer armed; a
+        // timer at `Nanos::MAX` would overflow the local-to-global clock conversion.
+        let next = if e == Nanos::MAX {
             app_next
         } else {
             e.min(app_next)
-        })
+        };
+        (next != Nanos::MAX).then_some(next)
     }
 }
 
