@@ -21,7 +21,7 @@ rows=(isr_slot_timer isr_can_rx isr_can_tx task_rx_process task_sync_slave task_
       task_tx_done critical_section_slot slot_boundary_to_txrq)
 tmp="$(mktemp)"
 trap 'rm -f "$tmp"' EXIT
-# RTIC logical priority of each measured path (examples/triskar2/src/module_app.rs).
+# RTIC logical priority of each measured path (boards/app/src/module_app.rs).
 declare -A prio=([isr_slot_timer]=4 [isr_can_rx]=3 [isr_can_tx]=3 [task_rx_process]=2
                  [task_sync_slave]=2 [task_prepare_slot]=2 [task_tx_done]=2)
 {

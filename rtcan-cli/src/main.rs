@@ -14,6 +14,7 @@ mod link_args;
 mod log_epoch;
 mod monitor;
 mod monitor_tui;
+mod new;
 mod out;
 mod param;
 mod pub_;
@@ -111,6 +112,12 @@ enum Cmd {
     /// (--json: service, call, request, reply or null, outcome, latency_ns). Exit 0
     /// replied, 1 timed out or refused, 2 bad input.
     Call(call::Args),
+    /// A firmware workspace for a robot (docs/SCAFFOLD.md)
+    ///
+    /// Writes into DIR one image per module, one node file per node, the host-side
+    /// simulator entry and size budgets; re-running adds what is new and never
+    /// overwrites node sources. Exit 0 written, 2 invalid robot, usage or I/O error.
+    New(new::Args),
 }
 
 fn dispatch(cmd: Cmd) -> i32 {
@@ -126,6 +133,7 @@ fn dispatch(cmd: Cmd) -> i32 {
         Cmd::Param(a) => param::run(a),
         Cmd::Flash(a) => flash::run(a),
         Cmd::Call(a) => call::run(a),
+        Cmd::New(a) => new::run(a),
     }
 }
 

@@ -11,6 +11,7 @@
     )
 )]
 
+pub mod apps;
 pub mod bus;
 pub mod campaign;
 pub mod candump;

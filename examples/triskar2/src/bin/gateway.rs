@@ -4,7 +4,8 @@
 #![no_std]
 #![no_main]
 
-use rtcan::robot_toml::gateway as module;
+use robot::gateway as module;
+use rtcan::robot_toml as robot;
 use triskar2_firmware as fw;
 type App = triskar2_nodes::app::GatewayApp;
 type Hw = fw::io::GatewayIo;
@@ -13,4 +14,4 @@ const NAME: &str = "gateway";
 /// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
 const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
 
-include!("../module_app.rs");
+rtcan_app_stm32f103::module_app!();

@@ -4,7 +4,8 @@
 #![no_std]
 #![no_main]
 
-use rtcan::robot_toml::motor1 as module;
+use robot::motor1 as module;
+use rtcan::robot_toml as robot;
 use triskar2_firmware as fw;
 type App = triskar2_nodes::app::Motor1App;
 type Hw = fw::io::MotorIo;
@@ -13,4 +14,4 @@ const NAME: &str = "motor1";
 /// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
 const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
 
-include!("../module_app.rs");
+rtcan_app_stm32f103::module_app!();

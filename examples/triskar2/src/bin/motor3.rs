@@ -2,7 +2,8 @@
 #![no_std]
 #![no_main]
 
-use rtcan::robot_toml::motor3 as module;
+use robot::motor3 as module;
+use rtcan::robot_toml as robot;
 use triskar2_firmware as fw;
 type App = triskar2_nodes::app::Motor3App;
 type Hw = fw::io::MotorIo;
@@ -11,4 +12,4 @@ const NAME: &str = "motor3";
 /// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
 const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
 
-include!("../module_app.rs");
+rtcan_app_stm32f103::module_app!();

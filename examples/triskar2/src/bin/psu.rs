@@ -3,7 +3,8 @@
 #![no_std]
 #![no_main]
 
-use rtcan::robot_toml::psu as module;
+use robot::psu as module;
+use rtcan::robot_toml as robot;
 use triskar2_firmware as fw;
 type App = triskar2_nodes::app::PsuApp;
 type Hw = fw::io::PsuIo;
@@ -12,4 +13,4 @@ const NAME: &str = "psu";
 /// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
 const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
 
-include!("../module_app.rs");
+rtcan_app_stm32f103::module_app!();

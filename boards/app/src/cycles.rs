@@ -8,6 +8,10 @@
 //! Without the feature every call here compiles to nothing.
 use core::sync::atomic::{AtomicU32, Ordering};
 
+/// Whether this build measures (the `cycles` feature); the app macro reads it, since a
+/// `cfg!` in the macro would test the calling crate's features instead.
+pub const ENABLED: bool = cfg!(feature = "cycles");
+
 /// Seconds between two printed tables.
 pub const PERIOD_S: u32 = 10;
 

@@ -1,23 +1,36 @@
-// The RTIC 2 app every module image runs, included by src/bin/<module>.rs after it
-// names, at its root: `fw` (this crate), `module` (its `rtcan::robot_toml::<module>`),
-// `App` (its app of `triskar2_nodes::app`), `Hw` (its hardware of `fw::io`), `NAME` and
-// `STAMPS` (the board's SOF timestamp strategy). RTIC's `#[app]` needs the whole module
-// in one item, hence `include!` and not a function or a trait.
+/// The RTIC 2 app every module image runs. Invoke it at the root of a bin
+/// (`src/bin/<module>.rs`) after naming there: `fw` (this crate, or a crate re-exporting
+/// its `board`, `driver`, `run`, `cycles`, `Mono` and `SYSCLK_HZ`), `robot` (the generated
+/// robot: `rtcan::robot_toml` or a `rtcan::robot!` module), `module` (its
+/// `robot::<module>`), `App` (the module's app: `App::new()` and
+/// `poll(&mut self, now, &mut Hw) -> next due time`), `Hw` (its hardware, `FromBoard`),
+/// `NAME` and `STAMPS` (the board's SOF timestamp strategy). The bin's crate depends on
+/// `rtic`, `rtcan-board-stm32f103`, `cortex-m`, `heapless` and `defmt` (the app's code
+/// names them). RTIC's `#[app]` needs the whole module in one item, hence a macro and
+/// not a function or a trait; Triskar2 and every workspace written by `rtcan new` share
+/// it.
 //
 // Split interrupt architecture (boards/common `protocol`, priorities in `fw::driver`):
 // the slot timer (4) only commits the plan the protocol task (2) prepared; CAN RX/TX/SCE
 // (3) only move registers into lock-free queues; the app (1) polls its nodes; SysTick is
 // set below everything. Only the slot-timer resource is shared across priorities (RTIC
 // priority ceilings: its critical sections are the slot timer's only blocking).
+#[macro_export]
+macro_rules! module_app {
+    () => {
+/// CAN bit timing register for robot.toml's bit rate (a compile error if PCLK1 cannot
+/// produce it exactly).
+const BTR: u32 =
+    rtcan_board_stm32f103::can_btr!(rtcan_board_stm32f103::PCLK1_HZ, robot::BUS.bitrate);
 
 #[rtic::app(device = rtcan_board_stm32f103::hal::pac, dispatchers = [EXTI2])]
 mod app {
-    use super::{fw, module, App, Hw, NAME, STAMPS};
+    use super::{fw, module, robot, App, Hw, BTR, NAME, STAMPS};
     use cortex_m::peripheral::scb::SystemHandler;
     use fw::board::FromBoard;
     use fw::driver::{pend_protocol, Driver, Rtic, SlotCore, RX_QUEUE, TX_QUEUE};
     use heapless::spsc::{Consumer, Producer, Queue};
-    use rtcan::robot_toml::BUS;
+    use robot::BUS;
     use rtcan_board_stm32f103::common::{RxEvent, SlotPlan, TxEvent};
     use rtcan_board_stm32f103::hal::watchdog::IndependentWatchdog;
     use rtcan_board_stm32f103::{filter_set, glue, CanRx, CanSce, CanTxIrq};
@@ -50,7 +63,7 @@ mod app {
         txq: Queue<TxEvent, TX_QUEUE> = Queue::new(),
     ])]
     fn init(mut cx: init::Context) -> (Shared, Local) {
-        let (bus, board) = fw::board::init(cx.device, filter_set!(module::FILTERS));
+        let (bus, board) = fw::board::init(cx.device, BTR, filter_set!(module::FILTERS));
         fw::Mono::start(cx.core.SYST, fw::SYSCLK_HZ);
         fw::cycles::enable(&mut cx.core.DCB, &mut cx.core.DWT);
         // The monotonic leaves SysTick at priority 0 (the highest): below everything,
@@ -100,7 +113,7 @@ mod app {
         let t = fw::cycles::now();
         let (pend, since_match) = cx.shared.slot.lock(|c| {
             let pend = glue::on_slot_timer(c);
-            let since = if cfg!(feature = "cycles") {
+            let since = if fw::cycles::ENABLED {
                 c.timer.ticks_since_commit_match()
             } else {
                 0
@@ -111,7 +124,7 @@ mod app {
             pend_protocol();
         }
         fw::cycles::ISR_SLOT_TIMER.since(t);
-        if pend && cfg!(feature = "cycles") {
+        if pend && fw::cycles::ENABLED {
             // 9 CPU cycles per 8 MHz tick.
             fw::cycles::SLOT_BOUNDARY_TO_TXRQ.add(u32::from(since_match) * 9);
         }
@@ -185,4 +198,6 @@ mod app {
             fw::run::sleep_until(now, due).await;
         }
     }
+}
+    };
 }

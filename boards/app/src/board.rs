@@ -1,7 +1,8 @@
 //! Start-up common to every module: clock tree (HSE 8 MHz → SYSCLK 72 MHz, PCLK1
 //! 36 MHz, the constants of `rtcan_board_stm32f103`), bxCAN on PA11/PA12 at the robot's
-//! bit rate with the module's acceptance filters, the slot timer on TIM2. What is left
-//! goes to the module's hardware ([`FromBoard`], implemented in `io`).
+//! bit rate (`btr`) with the module's acceptance filters, the slot timer on TIM2. What is left
+//! goes to the module's hardware ([`FromBoard`]: Triskar2's examples/triskar2/src/io.rs, or
+//! [`NoHw`] in a scaffolded image whose nodes have no drivers yet).
 use rtcan_board_stm32f103::hal::afio::{self, AfioExt};
 use rtcan_board_stm32f103::hal::can::CanExt;
 use rtcan_board_stm32f103::hal::gpio::Floating;
@@ -10,16 +11,9 @@ use rtcan_board_stm32f103::hal::pac;
 use rtcan_board_stm32f103::hal::prelude::*;
 use rtcan_board_stm32f103::hal::rcc::{self, Rcc};
 use rtcan_board_stm32f103::hal::watchdog::IndependentWatchdog;
-use rtcan_board_stm32f103::{
-    can_btr, configure, CanParts, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ,
-};
+use rtcan_board_stm32f103::{configure, CanParts, FilterSet, SlotTimer, PCLK1_HZ, TIM2_CLOCK_HZ};
 
 use crate::SYSCLK_HZ;
-use rtcan::robot_toml::BUS;
-
-/// CAN bit timing register for robot.toml's bit rate (a compile error if PCLK1 cannot
-/// produce it exactly).
-pub const BTR: u32 = can_btr!(PCLK1_HZ, BUS.bitrate);
 
 /// Pins left for the modules, with their port configuration registers.
 pub struct Pins {
@@ -81,8 +75,20 @@ pub trait FromBoard {
     fn from_board(board: Board) -> Self;
 }
 
-/// Brings the board up; `filters` = the module's `filter_set!(FILTERS)`.
-pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
+/// The hardware of an image whose nodes use none: every pin and peripheral left at
+/// its reset state (the default of a workspace written by `rtcan new`).
+pub struct NoHw;
+
+impl FromBoard for NoHw {
+    fn from_board(_board: Board) -> Self {
+        NoHw
+    }
+}
+
+/// Brings the board up; `btr` = `can_btr!(PCLK1_HZ, BUS.bitrate)` of the robot (computed
+/// by the app macro at compile time, so an unreachable bit rate is a compile error),
+/// `filters` = the module's `filter_set!(FILTERS)`.
+pub fn init(dp: pac::Peripherals, btr: u32, filters: FilterSet) -> (Bus, Board) {
     // Start the crystal with a bounded wait: the HAL's `freeze` waits for HSERDY for
     // ever, which on a board with a dead or missing crystal is a silent hang.
     dp.RCC.cr().modify(|_, w| w.hseon().set_bit());
@@ -119,7 +125,7 @@ pub fn init(dp: pac::Peripherals, filters: FilterSet) -> (Bus, Board) {
     let afio = dp.AFIO.constrain(&mut rcc);
     let tx = gpioa.pa12.into_alternate_push_pull(&mut gpioa.crh);
     let can = dp.CAN.can::<Floating>(dp.USB, (tx, gpioa.pa11), &mut rcc);
-    let can = match configure(can, BTR, filters) {
+    let can = match configure(can, btr, filters) {
         Ok(parts) => parts,
         Err(_) => defmt::panic!(
             "CAN did not join the bus (no 11 recessive bits): transceiver, supply, termination?"

@@ -1,0 +1,37 @@
+//! What every STM32F103 module image shares, whatever the robot: the RTIC 2 app
+//! ([`module_app!`], invoked by each bin after naming its module, app and hardware),
+//! board start-up ([`board`]), the protocol task's state ([`driver`]), the app task's
+//! sleep and wake-up ([`run`]), the bench counters ([`cycles`]), the SysTick monotonic,
+//! defmt over RTT and the panic handler. Triskar2 (examples/triskar2) and the workspaces
+//! `rtcan new` writes link the same code, so a fix here reaches every robot.
+#![no_std]
+
+pub mod board;
+pub mod cycles;
+pub mod driver;
+mod module_app;
+pub mod run;
+
+use defmt_rtt as _;
+
+// Panics: panic-probe (fault, so the probe stops and shows the log). Its `print-defmt`
+// (the panic message over defmt) formats the `PanicInfo` with `core::fmt` and keeps every
+// panic site's location string: measured +3.9 KiB flash per image (motor1 30 636 →
+// 34 576 B, `bash size-check.sh` / llvm-size), over the 32 KiB budget, so it is a feature
+// of the image crates for bring-up builds (`cargo run --release --features panic-message
+// --bin motor1`). The firmware's own panics are `defmt::panic!`, which log their
+// formatted message without it.
+use panic_probe as _;
+
+// SysTick monotonic at 1 kHz: wakes the app task at its due times. Time stamps and
+// the app's clock come from the slot timer instead (125 ns ticks, the clock the
+// engine and SOF stamps use).
+rtic_monotonics::systick_monotonic!(Mono, 1_000);
+
+/// SYSCLK, Hz (the clock tree of `rtcan_board_stm32f103`).
+pub const SYSCLK_HZ: u32 = 72_000_000;
+
+defmt::timestamp!("{=u32:ms}", {
+    use rtic_monotonics::Monotonic;
+    Mono::now().ticks()
+});
