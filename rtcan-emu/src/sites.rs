@@ -5,7 +5,7 @@
 //! Why one hook with a table rather than one Unicorn hook per site: Unicorn 2 calls a lone
 //! UC_HOOK_CODE hook inline from the translated code, but with two or more it calls a
 //! generic helper for every instruction that walks the whole hook list and checks each
-//! hook's bounds. With the ~100 site hooks of a Triskar2 image that walk, not the
+//! hook's bounds. With the 65–89 site hooks of a Triskar2 image that walk, not the
 //! instruction count, was the emulator's cost (measured on Unicorn 2.0.1: 2.6 ns per
 //! instruction with one hook, 10 ns with two, 227 ns with 101).
 use crate::elf::Segment;

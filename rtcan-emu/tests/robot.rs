@@ -322,6 +322,29 @@ fn proximity_hrt_misses_traced() {
         eprintln!("{:>12.3} ms  {e}", *t as f64 / 1e6);
     }
     let count = |s: &str| events.iter().filter(|(_, e)| e.starts_with(s)).count();
+    // The mechanism (docs/EMULATOR.md, Findings): each empty slot is a sample published
+    // after its slot's prepare (0.56 ms after it here) and replaced, never sent, by the
+    // next period's sample: as many replaced samples as empty slots.
+    assert!(count("slot prepare") > 0);
+    assert_eq!(count("REPLACED"), count("slot prepare"));
+    for (t, _) in events.iter().filter(|(t, e)| {
+        e.starts_with("slot prepare") && (1_000_000_000..1_400_000_000).contains(t)
+    }) {
+        let late = events
+            .iter()
+            .find(|(u, e)| u > t && e.starts_with("publish"))
+            .unwrap();
+        assert!(
+            late.0 - t < 1_000_000,
+            "sample {} ns after the prepare",
+            late.0 - t
+        );
+        let replaced = events
+            .iter()
+            .find(|(u, e)| *u > late.0 && e.starts_with("REPLACED"))
+            .unwrap();
+        assert!(replaced.0 - late.0 < 41_000_000);
+    }
     eprintln!(
         "in 3 s: {} publishes, {} replaced, {} empty slots, {} proximity frames ({:?} ids)",
         count("publish"),
