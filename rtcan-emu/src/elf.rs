@@ -84,3 +84,30 @@ pub fn symbol(b: &[u8], name: &str) -> Result<Option<u32>, BadElf> {
     }
     Ok(None)
 }
+
+/// The bytes of section `name` (e.g. ".debug_info"), if the file has it.
+pub fn section<'a>(b: &'a [u8], name: &str) -> Result<Option<&'a [u8]>, BadElf> {
+    let shoff = u32_at(b, 32)? as usize;
+    let shentsize = usize::from(u16_at(b, 46)?);
+    let shnum = usize::from(u16_at(b, 48)?);
+    let shstrndx = usize::from(u16_at(b, 50)?);
+    let names = u32_at(b, shoff + shstrndx * shentsize + 16)? as usize;
+    for i in 0..shnum {
+        let sh = shoff + i * shentsize;
+        let n = names + u32_at(b, sh)? as usize;
+        let end = b.get(n..).and_then(|r| r.iter().position(|&c| c == 0));
+        if end.and_then(|e| b.get(n..n + e)) != Some(name.as_bytes()) {
+            continue;
+        }
+        if u32_at(b, sh + 4)? == 8 {
+            return Ok(Some(&[])); // SHT_NOBITS: no bytes in the file
+        }
+        let off = u32_at(b, sh + 16)? as usize;
+        let size = u32_at(b, sh + 20)? as usize;
+        return b
+            .get(off..off + size)
+            .map(Some)
+            .ok_or(BadElf("section outside the file"));
+    }
+    Ok(None)
+}

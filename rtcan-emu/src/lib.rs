@@ -9,6 +9,7 @@ pub mod bus;
 pub mod bxcan;
 pub mod compare;
 pub mod elf;
+pub mod engine_ram;
 pub mod mcu;
 pub mod periph;
 pub mod probe;
@@ -18,6 +19,7 @@ pub mod rtt;
 pub mod scs;
 pub mod serial;
 pub mod sim_report;
+pub mod sites;
 mod uc;
 
 /// Result of a register access: the value read, or the unknown offset.

@@ -6,7 +6,7 @@
 use rtcan_emu::mcu::{Mcu, Timing};
 use rtcan_emu::robot::{EmuRobot, HostScript, MODULES};
 use rtcan_emu::sim_report::{triskar_run, RunInfo};
-use rtcan_emu::{report, rtt};
+use rtcan_emu::{engine_ram, report, rtt};
 use rtcan_sim::triskar::report::{triskar_json, triskar_text};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -143,7 +143,13 @@ fn run(args: Vec<String>) -> Result<(), (u8, String)> {
         cpi,
     };
     let emulation = report::json(&robot.bus, a.seconds, cpu, &logs);
-    let run = triskar_run(&mut robot, &plan, info, &logs).map_err(|e| (1, e))?;
+    // The engines' counters in RAM, from each image's DWARF (an image without debug info
+    // reports its frames counted on the bus).
+    let engines: Vec<_> = images
+        .iter()
+        .map(|elf| engine_ram::locate(elf).ok())
+        .collect();
+    let run = triskar_run(&mut robot, &plan, info, &logs, &engines).map_err(|e| (1, e))?;
     if a.json {
         let sim = triskar_json(&run, speed);
         let body = sim.strip_suffix('}').unwrap_or(&sim);

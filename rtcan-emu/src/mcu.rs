@@ -5,6 +5,7 @@ use crate::elf;
 use crate::periph::{Adc, Afio, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, APB1_CAN, PS};
 use crate::scs::Scs;
 use crate::serial::{Dma, Usart, USART1_DR};
+use crate::sites::{Site, Sites};
 use crate::uc::*;
 use crate::Access;
 use core::ffi::c_void;
@@ -44,6 +45,16 @@ pub struct UnknownAccess {
     pub pc: u32,
     pub write: bool,
     pub time_ps: u64,
+}
+
+/// A store into a watched range (`Mcu::watch_writes`): diagnostics of what the image
+/// did when, with the exact emulated time and the storing instruction.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WriteRecord {
+    pub time_ps: u64,
+    pub pc: u32,
+    pub addr: u32,
+    pub value: u32,
 }
 
 /// Everything the callbacks reach (boxed: Unicorn holds its address).
@@ -89,6 +100,10 @@ pub struct State {
     dbg_cr: u32,
     /// Bus bit time in ps (from BTR and PCLK1) and the bus clock origin.
     pub bit_ps: u64,
+    /// The image's WFI / `b .` / unmask instructions (`on_code`).
+    sites: Sites,
+    /// Stores into the ranges given to `Mcu::watch_writes`, in order.
+    pub writes: Vec<WriteRecord>,
     uc: *mut uc_engine,
 }
 
@@ -327,48 +342,41 @@ fn region_base(off: u64) -> u32 {
     off as u32
 }
 
-extern "C" fn on_code(uc: *mut uc_engine, _addr: u64, _size: u32, ud: *mut c_void) {
+/// The one code hook (see `sites` for why one): counts the instruction that is about to
+/// execute, ends the run at the budget, and acts on the image's WFI / `b .` / unmask sites.
+extern "C" fn on_code(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
     st.instructions += 1;
     if st.instructions >= st.budget {
         // SAFETY: `uc` is the engine calling this hook.
         unsafe { uc_emu_stop(uc) };
+        // The instruction does not execute (Unicorn checks the stop request right after
+        // the hook); its site is acted on when the next run reaches it again.
+        return;
+    }
+    match st.sites.at(addr as u32) {
+        None => {}
+        // `b .`: a spin that only an interrupt leaves (RTIC's idle without an idle task).
+        // Equivalent to sleeping: time jumps to the next event, PC stays.
+        Some(Site::Spin) => sleep_at(uc, st, addr as u32 | 1),
+        // WFI: sleep, and resume past the 16-bit WFI (Thumb bit set).
+        Some(Site::Wfi) => sleep_at(uc, st, addr as u32 + 3),
+        // An instruction that may unmask a pending interrupt: end the run right after it,
+        // so the interrupt is taken there (as the NVIC would) rather than at the end of
+        // the run. +2: the run stops before the instruction after the next one (at most
+        // one instruction late), as when this was a hook of its own called after the
+        // counting hook.
+        Some(Site::Unmask) => st.budget = st.budget.min(st.instructions + 2),
     }
 }
 
-/// `b .` (0xE7FE): a spin that only an interrupt leaves (RTIC's idle without an idle
-/// task). Equivalent to sleeping: time jumps to the next event, PC stays.
-extern "C" fn on_spin(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
-    // SAFETY: as in `mmio_read`.
-    let st = unsafe { &mut *ud.cast::<State>() };
+/// Ends the run before the current instruction, asleep, resuming at `pc`.
+fn sleep_at(uc: *mut uc_engine, st: &mut State, pc: u32) {
     st.wfi = true;
-    let here = addr as u32 | 1;
-    // SAFETY: `uc` is the engine calling this hook.
+    // SAFETY: `uc` is the engine calling the hook; PC writes in hooks restart there.
     unsafe {
-        uc_reg_write(uc, REG_PC, (&here as *const u32).cast());
-        uc_emu_stop(uc);
-    }
-}
-
-/// An instruction that may unmask a pending interrupt: end the run right after it, so the
-/// interrupt is taken there (as the NVIC would) rather than at the end of the run.
-extern "C" fn on_unmask(_uc: *mut uc_engine, _addr: u64, _size: u32, ud: *mut c_void) {
-    // SAFETY: as in `mmio_read`.
-    let st = unsafe { &mut *ud.cast::<State>() };
-    // +2: whichever of this hook and `on_code` runs first for this instruction, the run
-    // stops before the instruction after it (at most one instruction late).
-    st.budget = st.budget.min(st.instructions + 2);
-}
-
-extern "C" fn on_wfi(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
-    // SAFETY: as in `mmio_read`.
-    let st = unsafe { &mut *ud.cast::<State>() };
-    st.wfi = true;
-    let next = addr as u32 + 3; // past the 16-bit WFI, Thumb bit set
-                                // SAFETY: `uc` is the engine calling this hook; PC writes in hooks restart there.
-    unsafe {
-        uc_reg_write(uc, REG_PC, (&next as *const u32).cast());
+        uc_reg_write(uc, REG_PC, (&pc as *const u32).cast());
         uc_emu_stop(uc);
     }
 }
@@ -387,6 +395,25 @@ extern "C" fn on_intr(uc: *mut uc_engine, intno: u32, ud: *mut c_void) {
     }
     // SAFETY: `uc` is the engine calling this hook.
     unsafe { uc_emu_stop(uc) };
+}
+
+extern "C" fn on_write(
+    _uc: *mut uc_engine,
+    _kind: i32,
+    addr: u64,
+    _size: i32,
+    value: i64,
+    ud: *mut c_void,
+) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
+    let rec = WriteRecord {
+        time_ps: st.now(),
+        pc: st.pc(),
+        addr: addr as u32,
+        value: value as u32,
+    };
+    st.writes.push(rec);
 }
 
 extern "C" fn on_unmapped(
@@ -490,6 +517,8 @@ impl Mcu {
             fault: None,
             dbg_cr: 0,
             bit_ps: 1_000_000,
+            sites: Sites::scan(&image),
+            writes: Vec::new(),
             uc,
         });
         st.retime();
@@ -567,34 +596,6 @@ impl Mcu {
                 ),
             )?;
         }
-        // WFI sites (0xBF30 at half-word boundaries of the code): a hook each, to sleep.
-        for seg in &image {
-            let halves: Vec<&[u8]> = seg.bytes.chunks_exact(2).collect();
-            for (i, hw) in halves.iter().enumerate() {
-                let next = halves.get(i + 1).copied().unwrap_or(&[]);
-                let hook: *mut c_void = match (*hw, next) {
-                    ([0x30, 0xBF], _) => on_wfi as *mut c_void,
-                    ([0xFE, 0xE7], _) => on_spin as *mut c_void,
-                    // Instructions that can unmask a pending interrupt: CPSIE i (0xB662),
-                    // MSR PRIMASK / BASEPRI, Rn (0xF38n 0x8810 / 0x8811; ARMv7-M A7.7.83,
-                    // B5.2.3): RTIC's lock release and critical-section exit.
-                    ([0x62, 0xB6], _) => on_unmask as *mut c_void,
-                    ([n, 0xF3], [0x10 | 0x11, 0x88]) if n & 0xF0 == 0x80 => {
-                        on_unmask as *mut c_void
-                    }
-                    _ => continue,
-                };
-                let a = u64::from(seg.addr) + 2 * i as u64;
-                let mut h: uc_hook = 0;
-                // SAFETY: see above.
-                unsafe {
-                    check(
-                        "hook wfi",
-                        uc_hook_add(uc, &mut h, UC_HOOK_CODE, hook, ud, a, a),
-                    )?
-                };
-            }
-        }
         let mut mcu = Mcu {
             name: name.to_string(),
             uc,
@@ -604,6 +605,30 @@ impl Mcu {
         };
         mcu.reset()?;
         Ok(mcu)
+    }
+
+    /// Records every store into `[addr, addr + len)` in `State::writes` (time, PC,
+    /// value). For diagnostics: a memory hook sends every access of the MCU through
+    /// Unicorn's slow path.
+    pub fn watch_writes(&mut self, addr: u32, len: u32) -> Result<(), EmuError> {
+        let ud: *mut c_void = (&mut *self.st as *mut State).cast();
+        let mut h: uc_hook = 0;
+        let end = u64::from(addr) + u64::from(len.max(1)) - 1;
+        // SAFETY: live engine; `st` is boxed and outlives the engine (see `new`).
+        unsafe {
+            check(
+                "hook write",
+                uc_hook_add(
+                    self.uc,
+                    &mut h,
+                    UC_HOOK_MEM_WRITE,
+                    on_write as *mut c_void,
+                    ud,
+                    u64::from(addr),
+                    end,
+                ),
+            )
+        }
     }
 
     /// Program counter.

@@ -15,8 +15,9 @@
 //! - Robot: the simulator's plant (path, gap, wall), odometry and the host-bound
 //!   messages as decoded from the gateway's USART1 output, overrides from the bus.
 //! - Modules: `synced` = sent a frame in the last 0.2 s (a slave that lost sync stops
-//!   transmitting), safe state from the images' defmt lines, `tx_frames` from the bus;
-//!   the engine's other counters live in the images' RAM and read 0.
+//!   transmitting), safe state from the images' defmt lines; the engine's counters are
+//!   read from each image's RAM at the end of the run (`engine_ram`, located through the
+//!   image's DWARF); an image without debug info reports `tx_frames` from the bus only.
 use std::collections::BTreeMap;
 
 use rtcan_core::fragment::{counter_of, fragment_count};
@@ -113,12 +114,14 @@ fn safe_from_log(lines: &[String]) -> (u32, bool) {
 }
 
 /// The report of an emulated run of `robot` (after `run_until(info.seconds)`); `logs`
-/// are the decoded defmt lines per module, `cpu_s` the CPU time it took.
+/// are the decoded defmt lines per module, `engines` where each module's engine counters
+/// are in its RAM (`engine_ram::locate` of its image; `None`: counted on the bus).
 pub fn triskar_run(
     robot: &mut EmuRobot,
     plan: &Plan,
     info: RunInfo,
     logs: &[Vec<String>],
+    engines: &[Option<crate::engine_ram::CountersAt>],
 ) -> Result<TriskarRun, String> {
     let sc = rtcan_sim::robot::scenario(plan, &[])?;
     let sim = SimConfig {
@@ -192,9 +195,12 @@ pub fn triskar_run(
             .take_while(|(_, _, sof)| sof * bit_ns >= recent)
             .any(|(n, _, _)| *n == i);
         let (safe_trips, safe_now) = safe_from_log(logs.get(i).map_or(&[][..], |l| l));
-        let counters = rtcan_core::counters::Counters {
-            tx_frames: u32::try_from(sent).unwrap_or(u32::MAX),
-            ..Default::default()
+        let counters = match engines.get(i).and_then(Option::as_ref) {
+            Some(at) => at.read(m).map_err(|e| format!("{}: {e}", m.name))?,
+            None => rtcan_core::counters::Counters {
+                tx_frames: u32::try_from(sent).unwrap_or(u32::MAX),
+                ..Default::default()
+            },
         };
         let motor = (1..=3).contains(&i).then(|| {
             let w = robot
@@ -204,7 +210,6 @@ pub fn triskar_run(
                 .map_or(0.0, |mo| mo.wheel_speed_rad_s());
             (w as f32, safe_now)
         });
-        let _ = m;
         modules.push(ModuleReport {
             name,
             counters,

@@ -19,6 +19,7 @@ pub const UC_PROT_ALL: u32 = 7;
 pub const UC_HOOK_INTR: i32 = 1;
 pub const UC_HOOK_CODE: i32 = 4;
 pub const UC_HOOK_MEM_UNMAPPED: i32 = 112;
+pub const UC_HOOK_MEM_WRITE: i32 = 2048;
 
 pub const REG_R0: i32 = 66;
 pub const REG_SP: i32 = 12;

@@ -72,7 +72,7 @@ fn slot_latency_and_jitter_agree_with_the_cpu_model() {
         wall_x_m: 1.5,
         cpi: CPI,
     };
-    let emu = triskar_run(&mut robot, &plan(), info, &[]).unwrap();
+    let emu = triskar_run(&mut robot, &plan(), info, &[], &[]).unwrap();
     let (mean, max) = (model(Cost::Mean), model(Cost::Max));
     let rows = rows(&emu, &mean, &max);
     eprintln!("{}", text(&rows, CPI));

@@ -8,6 +8,7 @@
     clippy::indexing_slicing,
     clippy::panic
 )]
+use rtcan_emu::engine_ram;
 use rtcan_emu::mcu::{Mcu, Timing};
 use rtcan_emu::robot::{EmuRobot, HostScript, MODULES};
 use rtcan_emu::sim_report::{triskar_run, RunInfo};
@@ -83,8 +84,40 @@ fn emulated_robot_drives_to_the_wall_and_stops_short() {
         wall_x_m: 1.5,
         cpi: 1.5,
     };
-    let r = triskar_run(&mut robot, &plan(), info, &logs).unwrap();
+    // The engines' own counters, from each image's RAM (found through its DWARF).
+    let engines: Vec<_> = MODULES
+        .iter()
+        .map(|n| Some(engine_ram::locate(&image(n)).unwrap()))
+        .collect();
+    let sent: Vec<usize> = (0..6)
+        .map(|i| robot.bus.log.iter().filter(|(n, _, _)| *n == i).count())
+        .collect();
+    let r = triskar_run(&mut robot, &plan(), info, &logs, &engines).unwrap();
     eprintln!("{}", rtcan_sim::triskar::report::triskar_text(&r));
+    for (m, bus) in r.modules.iter().zip(&sent) {
+        let c = &m.counters;
+        eprintln!("{}: bus {bus} {c:?}", m.name);
+        // The engine counts a frame when its mailbox reports it sent: the bus log and
+        // the engine agree but for a frame still on its way to the TX interrupt.
+        assert!(
+            (*bus as i64 - i64::from(c.tx_frames)).abs() <= 1,
+            "{}: engine tx_frames {} vs {bus} on the bus",
+            m.name,
+            c.tx_frames
+        );
+        assert_eq!(
+            (
+                c.tx_failed,
+                c.rx_bad_dlc,
+                c.rx_bad_sync,
+                c.bus_off,
+                c.queue_full
+            ),
+            (0, 0, 0, 0, 0),
+            "{}",
+            m.name
+        );
+    }
     // It moved: the host's command reached the wheels through the gateway's USART and
     // DMA, gateway → proximity → motor1 → motors, and went well over halfway to the wall.
     assert!(r.max_x_m > 0.6, "max x {}", r.max_x_m);
@@ -198,5 +231,126 @@ fn host_link_teleop_in_odometry_out() {
     assert!(
         last.1 > 0.1 && (f64::from(last.1) - r.physics.base.pose().x).abs() < 0.05,
         "{last:?}"
+    );
+}
+
+/// The engine counters of every image are found in its DWARF: all 22 fields of
+/// `rtcan_core::counters::Counters`, inside the driver's static, in SRAM.
+#[test]
+fn engine_counters_located_in_every_image() {
+    for n in MODULES {
+        let elf = image(n);
+        let at = engine_ram::locate(&elf).unwrap();
+        assert_eq!(at.fields.len(), 22, "{n}: {:?}", at.fields);
+        let base = rtcan_emu::elf::symbol(&elf, "_SEGGER_RTT")
+            .unwrap()
+            .unwrap();
+        for (name, a) in &at.fields {
+            assert!(
+                (0x2000_0000..0x2001_0000).contains(a) && a % 4 == 0,
+                "{n}: {name} at {a:#x}"
+            );
+        }
+        // Distinct, consecutive words (the struct is 22 u32).
+        let first = at.fields[0].1;
+        for (k, (_, a)) in at.fields.iter().enumerate() {
+            assert_eq!(*a, first + 4 * k as u32, "{n}");
+        }
+        let _ = base;
+    }
+    // Not an image: an error, no panic.
+    assert!(engine_ram::locate(b"not an elf").is_err());
+}
+
+/// docs/EMULATOR.md "Findings": proximity misses HRT slots. The evidence, from the
+/// emulated RAM: the `proximity` topic's counters (rtcan-pubsub `TopicStats`) written by
+/// the app (publish, replace) and by the engine's slot prepare (nothing to send), with
+/// their exact emulated times, against the frames on the bus.
+#[test]
+fn proximity_hrt_misses_traced() {
+    let mut robot = robot(HostScript::default());
+    let elf = image("proximity");
+    let stats = engine_ram::find_struct(&elf, "PROXIMITY", "TopicStats", "hrt_replaced").unwrap();
+    let addr = |f: &str| stats.iter().find(|(n, _)| n == f).unwrap().1;
+    let (published, replaced, nothing) = (
+        addr("published"),
+        addr("hrt_replaced"),
+        addr("nothing_to_send"),
+    );
+    let p = &mut robot.bus.mcus[4];
+    for a in [published, replaced, nothing] {
+        p.watch_writes(a, 4).unwrap();
+    }
+    robot.run_until(3_000 * MS).unwrap();
+    no_faults(&robot);
+    let p = &robot.bus.mcus[4];
+    let mut events: Vec<(u64, String)> =
+        p.st.writes
+            .iter()
+            .map(|w| {
+                let what = if w.addr == published {
+                    "publish"
+                } else if w.addr == replaced {
+                    "REPLACED (previous sample never sent)"
+                } else {
+                    "slot prepare: NOTHING to send"
+                };
+                (
+                    w.time_ps / 1000,
+                    format!("{what} #{} pc {:#010x}", w.value, w.pc),
+                )
+            })
+            .collect();
+    let bit_ns = robot.bus.bit_ps / 1000;
+    let prox_id = robot
+        .bus
+        .log
+        .iter()
+        .filter(|(n, _, _)| *n == 4)
+        .map(|(_, f, _)| f.id)
+        .collect::<Vec<_>>();
+    for (n, f, sof) in &robot.bus.log {
+        if *n == 4 {
+            events.push((sof * bit_ns, format!("bus: proximity frame id {:#x}", f.id)));
+        }
+    }
+    events.sort();
+    for (t, e) in events
+        .iter()
+        .filter(|(t, _)| (1_000_000_000..1_400_000_000).contains(t))
+    {
+        eprintln!("{:>12.3} ms  {e}", *t as f64 / 1e6);
+    }
+    let count = |s: &str| events.iter().filter(|(_, e)| e.starts_with(s)).count();
+    // The mechanism (docs/EMULATOR.md, Findings): each empty slot is a sample published
+    // after its slot's prepare (0.56 ms after it here) and replaced, never sent, by the
+    // next period's sample: as many replaced samples as empty slots.
+    assert!(count("slot prepare") > 0);
+    assert_eq!(count("REPLACED"), count("slot prepare"));
+    for (t, _) in events.iter().filter(|(t, e)| {
+        e.starts_with("slot prepare") && (1_000_000_000..1_400_000_000).contains(t)
+    }) {
+        let late = events
+            .iter()
+            .find(|(u, e)| u > t && e.starts_with("publish"))
+            .unwrap();
+        assert!(
+            late.0 - t < 1_000_000,
+            "sample {} ns after the prepare",
+            late.0 - t
+        );
+        let replaced = events
+            .iter()
+            .find(|(u, e)| *u > late.0 && e.starts_with("REPLACED"))
+            .unwrap();
+        assert!(replaced.0 - late.0 < 41_000_000);
+    }
+    eprintln!(
+        "in 3 s: {} publishes, {} replaced, {} empty slots, {} proximity frames ({:?} ids)",
+        count("publish"),
+        count("REPLACED"),
+        count("slot prepare"),
+        count("bus"),
+        prox_id.len()
     );
 }
