@@ -36,5 +36,7 @@ echo "== issue 15: bootloader image (thumbv7m) within its 8 KiB budget; rtcan pa
 (cd rtcan-boot/bootloader && cargo build --release -q && \
     bash ../../boards/size-check.sh budget.toml target/thumbv7m-none-eabi/release)
 cargo run -q -p rtcan-cli -- param set motor1.kp 0.8 --sim robot.toml
+echo "== issue 15: firmware update over the simulated bus (28 KiB to motor1, robot running)"
+cargo run -q -p rtcan-cli -- flash robot.toml --module motor1
 echo "== issue 14: two robots that are not Triskar2 scaffolded by rtcan new, every image built within budget, their nodes simulated (HRT misses 0)"
 bash scripts/scaffold-check.sh

@@ -986,7 +986,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         if self.window_end <= now
             || (self.queue.is_empty()
                 && !self.heartbeat_pending
-                && (self.service_loaded() || host.service_tx().is_none()))
+                && (host.service_tx().is_none() || self.service_loaded()))
         {
             return;
         }
@@ -1124,13 +1124,16 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
         // The update channel last: below every message and the heartbeat, one frame in
         // a mailbox at a time (in order on the wire, docs/PROTOCOL.md §2.3).
-        if !self.service_loaded() {
-            if let Some(f) = host.service_tx() {
-                if !crate::service::sendable(&f) {
-                    host.service_sent();
-                } else if self.wc(f.dlc()) < remaining {
-                    return Some((NRT_KEY, Item::Service { dlc: f.dlc() }));
-                }
+        // (The host is asked first: a host without the channel answers `None` inline,
+        // and the mailbox scan is skipped.)
+        if let Some(f) = host.service_tx() {
+            if self.service_loaded() {
+                return None;
+            }
+            if !crate::service::sendable(&f) {
+                host.service_sent();
+            } else if self.wc(f.dlc()) < remaining {
+                return Some((NRT_KEY, Item::Service { dlc: f.dlc() }));
             }
         }
         None

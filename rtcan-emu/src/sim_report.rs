@@ -269,6 +269,10 @@ pub fn triskar_run(
         gateway_rx: (rx.proximity, rx.battery, rx.log, rx.last_log.clone()),
         modules,
         supervision: Vec::new(),
+        // No firmware update in an emulated run (the images have no update port yet).
+        update: Vec::new(),
+        booted: Vec::new(),
+        update_cuts: Vec::new(),
         syncs,
         slots_live: (0, 0),
         config: TriskarConfig {
@@ -281,6 +285,7 @@ pub fn triskar_run(
             module_dies_at: None,
             faults: Vec::new(),
             guardian: false,
+            update: None,
         },
     })
 }

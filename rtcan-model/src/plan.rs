@@ -394,11 +394,16 @@ pub fn build_locked(
         Some(l) => crate::lock::assign_ids(model, l, &mut moves),
         None => ids::assign(model),
     };
-    let Some(msg_ids) = assigned else {
+    // IDs from 0xFF80 are the update channel's (docs/PROTOCOL.md §2.3).
+    let below_services = |ids: &Vec<u16>| {
+        ids.iter()
+            .all(|&i| !rtcan_core::service::is_service(MsgId(i)))
+    };
+    let Some(msg_ids) = assigned.filter(below_services) else {
         diags.push(Diagnostic::new(
             Code::TableTooLarge,
             None,
-            "too many topics for the 16-bit message ID space",
+            "too many topics for the message IDs below the update range (0x0140..0xFF80)",
         ));
         return None;
     };
