@@ -41,7 +41,7 @@ fn a_zenoh_peer_in_another_process_sees_and_drives_the_simulated_robot() {
     let mut ready = String::new();
     out.read_line(&mut ready).unwrap();
     assert!(
-        ready.starts_with("bridge ready: 9 topics on rtcan/triskar2/*")
+        ready.starts_with("bridge ready: 11 topics on rtcan/triskar2/*")
             && ready.contains("writable: teleop"),
         "{ready}"
     );

@@ -89,7 +89,7 @@ fn sim_reports_the_cpu_model() {
     let out = sim(&["--cpu-design", "old", "--cpi", "2"]);
     assert!(
         out.contains(
-            r#""cpu":{"design":"single-priority","cpi":2,"clock_hz":72000000,"cost":"max","#
+            r#""cpu":{"design":"single-priority","cpi":2.0,"clock_hz":72000000,"cost":"max","#
         ),
         "{out}"
     );
@@ -106,7 +106,7 @@ fn sim_reports_the_cpu_model() {
 #[test]
 fn sim_rejects_bad_cpu_options() {
     for (args, msg) in [
-        (&["--cpi", "abc"][..], "bad --cpi"),
+        (&["--cpi", "abc"][..], "invalid value 'abc' for '--cpi"),
         (&["--cpi", "0"][..], "--cpi must be in [0.5, 10]"),
         (&["--cpi", "NaN"][..], "--cpi must be in [0.5, 10]"),
         (&["--cpu-design", "fast"][..], "unknown --cpu-design `fast`"),

@@ -11,6 +11,8 @@ const MAX_PAYLOAD: usize = 256;
 /// First heartbeat message ID and first topic message ID (§2.3).
 const HEARTBEAT_FIRST: u32 = 0x0100;
 const TOPIC_FIRST: u32 = 0x0140;
+/// PROTOCOL §2.3: first message ID of the update channel (firmware update, host-routed).
+const UPDATE_FIRST: u32 = 0xFF80;
 /// The laxity of NRT frames (§2.1), which heartbeats must carry (§9).
 const NRT: u32 = 63;
 
@@ -133,6 +135,9 @@ impl Oracle {
             self.sync(data);
         } else if (HEARTBEAT_FIRST..TOPIC_FIRST).contains(&msg) {
             self.heartbeat(laxity, msg, field, data);
+        } else if msg >= UPDATE_FIRST {
+            // §2.3: the update channel (`0xFF80..=0xFFFF`) belongs to the host; the
+            // receive rules and their counters do not apply to it.
         } else {
             match self.topics.iter().position(|t| u32::from(t.msg_id) == msg) {
                 Some(i) => self.fragment(i, field, data, sof),

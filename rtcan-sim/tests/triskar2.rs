@@ -74,7 +74,15 @@ fn robot_drives_to_the_wall_and_the_obstacle_node_stops_it_short() {
         assert_eq!(m.safe_trips, 0, "{} tripped", m.name);
         assert!(!m.safe_now, "{}", m.name);
     }
-    for c in &r.run.figures.srt {
+    // `triskar::run` makes no service calls: the `proximity_read` topics stay silent
+    // (rtcan-sim/tests/services.rs covers them).
+    for c in r
+        .run
+        .figures
+        .srt
+        .iter()
+        .filter(|c| !c.name.starts_with("proximity_read"))
+    {
         assert!(c.count > 50, "{}: {}", c.name, c.count);
         assert_eq!(c.misses, 0, "{}", c.name);
     }
@@ -169,7 +177,13 @@ fn srt_figures_under_bit_errors_follow_the_messages_not_their_rank() {
         .iter()
         .map(|m| u64::from(m.counters.deadline_missed) + u64::from(m.counters.queue_full))
         .sum();
-    for c in &r.run.figures.srt {
+    for c in r
+        .run
+        .figures
+        .srt
+        .iter()
+        .filter(|c| !c.name.starts_with("proximity_read"))
+    {
         eprintln!(
             "{}: {} events, {} misses, max {} ns; engine drops {dropped}",
             c.name,
