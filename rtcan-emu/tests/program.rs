@@ -64,7 +64,17 @@ fn json_report_of_a_short_run() {
         .iter()
         .map(|c| c["class"].as_str().unwrap())
         .collect();
-    assert_eq!(srt, ["teleop", "velocity"]);
+    // The plan's SRT topics, `proximity_read`'s request and reply included (robot.toml's
+    // `[services]`; the images make no calls, so they stay silent).
+    assert_eq!(
+        srt,
+        [
+            "teleop",
+            "proximity_read_request",
+            "velocity",
+            "proximity_read_reply"
+        ]
+    );
     let load = &v["run"]["load"];
     let total: f64 = ["sync", "hrt", "srt", "nrt"]
         .iter()
