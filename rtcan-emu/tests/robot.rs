@@ -144,7 +144,13 @@ fn emulated_robot_drives_to_the_wall_and_stops_short() {
         assert!(!m.safe_now, "{}", m.name);
     }
     // The images make no `proximity_read` calls: its request/reply topics stay silent.
-    for c in r.run.figures.srt.iter().filter(|c| !c.name.starts_with("proximity_read")) {
+    for c in r
+        .run
+        .figures
+        .srt
+        .iter()
+        .filter(|c| !c.name.starts_with("proximity_read"))
+    {
         assert!(c.count > 50, "{}: {}", c.name, c.count);
         assert_eq!(c.misses, 0, "{}", c.name);
     }
