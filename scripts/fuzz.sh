@@ -7,6 +7,7 @@
 # that add coverage. libFuzzer's last lines give the execution count and exec/s.
 # FUZZ_TIMEOUT=S raises the per-input timeout (default 10 s): under nice -n 19 on a loaded
 # machine a starved process can pass 10 s on an input that takes 0.25 s alone.
+# FUZZ_NICE=N sets the niceness (default 19; 0 gives a long run its own core).
 # A crash is written to fuzz/artifacts/TARGET/: fix the bug, keep the file (the stable
 # replay test `cargo test -p rtcan-fuzz` runs it from then on).
 set -euo pipefail
@@ -43,5 +44,5 @@ runs=${3:--1}
 extra=$(flags "$target")
 mkdir -p "target/new-corpus/$target" "corpus/$target"
 # shellcheck disable=SC2086
-exec nice -n 19 cargo +nightly fuzz run -s none "$target" "target/new-corpus/$target" "corpus/$target" -- \
+exec nice -n "${FUZZ_NICE:-19}" cargo +nightly fuzz run -s none "$target" "target/new-corpus/$target" "corpus/$target" -- \
   $extra -timeout="${FUZZ_TIMEOUT:-10}" -max_total_time="$seconds" -runs="$runs" -print_final_stats=1
