@@ -29,3 +29,17 @@ if [ "${1:-}" = "--qemu" ] && [ ! -e /usr/include/unicorn/unicorn.h ]; then
     exit 1
   fi
 fi
+# Third-party readers of our output (rtcan-cli/tests/interop.rs, with RTCAN_REQUIRE_INTEROP=1
+# set by scripts/test.sh): can-utils' log2asc reads our candump logs, cantools our DBC.
+if [ "${1:-}" = "--qemu" ] && ! command -v log2asc >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq can-utils >/dev/null
+  else
+    echo "can-utils missing: run 'sudo apt-get install can-utils'" >&2
+    exit 1
+  fi
+fi
+if [ "${1:-}" = "--qemu" ] && ! python3 -c "import cantools" >/dev/null 2>&1; then
+  python3 -m pip install --quiet -r scripts/interop-requirements.txt
+fi

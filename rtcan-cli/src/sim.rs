@@ -3,11 +3,12 @@
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
+use rtcan_sim::plot::{self, Plot};
 use rtcan_sim::policy::PolicyKind;
 use rtcan_sim::run::{Run, Scenario, SimConfig};
 use rtcan_sim::session::{self, Report, Request, Speed, Which};
 use rtcan_sim::triskar::report as triskar_report;
-use rtcan_sim::{candump, report, svg};
+use rtcan_sim::{candump, report};
 
 /// `rtcan sim`: the workspace robot runs triskar2, any other robot its generic traffic
 /// scenario. `--emulate` runs the Triskar2 release images on emulated STM32F103s instead
@@ -298,6 +299,13 @@ fn write(dir: &Path, name: &str, text: &str) -> Result<(), String> {
     std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))
 }
 
+/// A plot as `STEM.svg` with its numbers beside it in `STEM.csv`.
+fn write_plot(dir: &Path, stem: &str, plot: &Result<Plot, String>) -> Result<(), String> {
+    let plot = plot.as_ref().map_err(|e| format!("{stem}.svg: {e}"))?;
+    write(dir, &format!("{stem}.svg"), &plot.svg)?;
+    write(dir, &format!("{stem}.csv"), &plot.csv)
+}
+
 fn progress(done: usize, total: usize) {
     let width = 30;
     let filled = done * width / total.max(1);
@@ -332,45 +340,24 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
     if !run.wire.is_empty() {
         write(dir, "can0.log", &candump::log(&run.wire, "can0"))?;
     }
-    write(
+    write_plot(
         dir,
-        &format!("hrt-jitter-{}.svg", run.policy),
-        &svg::hrt_jitter(run),
+        &format!("hrt-jitter-{}", run.policy),
+        &plot::hrt_jitter(run),
     )?;
-    write(
+    write_plot(
         dir,
-        &format!("srt-latency-{}.svg", run.policy),
-        &svg::srt_latency(run),
+        &format!("srt-latency-{}", run.policy),
+        &plot::srt_latency(run),
     )?;
     if let Some(bus) = sc.bus() {
-        let rows: Vec<(String, Vec<(u32, String)>)> = sc
-            .tables
-            .iter()
-            .enumerate()
-            .map(|(n, t)| {
-                let cells = t
-                    .calendar
-                    .iter()
-                    .filter(|e| e.slot < u32::from(bus.slots_per_cycle))
-                    .map(|e| {
-                        let label = sc
-                            .topics
-                            .iter()
-                            .find(|i| i.node == n && i.tx == e.tx)
-                            .map_or("?", |i| i.label.as_str());
-                        (e.slot, label.chars().take(4).collect())
-                    })
-                    .collect();
-                (format!("node {n}"), cells)
-            })
-            .collect();
-        write(
+        write_plot(
             dir,
-            "calendar.svg",
-            &svg::calendar(
+            "calendar",
+            &plot::calendar(
                 bus.slots_per_cycle,
                 sc.masks().first().copied().unwrap_or(1),
-                &rows,
+                &plot::calendar_rows(sc),
             ),
         )?;
     }
@@ -434,26 +421,26 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
                     outputs(dir, scenario, ours)?;
                 }
                 for r in runs.iter().filter(|r| r.policy != PolicyKind::Ours.name()) {
-                    write(
+                    write_plot(
                         dir,
-                        &format!("srt-latency-{}.svg", r.policy),
-                        &svg::srt_latency(r),
+                        &format!("srt-latency-{}", r.policy),
+                        &plot::srt_latency(r),
                     )?;
                 }
                 if let Some(r) = runs
                     .iter()
                     .find(|r| r.policy == PolicyKind::FixedPriority.name())
                 {
-                    write(
+                    write_plot(
                         dir,
-                        &format!("hrt-jitter-{}.svg", r.policy),
-                        &svg::hrt_jitter(r),
+                        &format!("hrt-jitter-{}", r.policy),
+                        &plot::hrt_jitter(r),
                     )?;
                 }
                 if !sweep.is_empty() {
-                    let (miss, lat) = svg::sweep(sweep);
-                    write(dir, "sweep-miss.svg", &miss)?;
-                    write(dir, "sweep-latency.svg", &lat)?;
+                    let (miss, lat) = plot::sweep(sweep)?;
+                    write_plot(dir, "sweep-miss", &Ok(miss))?;
+                    write_plot(dir, "sweep-latency", &Ok(lat))?;
                 }
                 write(dir, "report.json", &report::comparison_json(comparison))?;
             }
@@ -515,7 +502,7 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
             }
             if let Some(dir) = &a.out {
                 outputs(dir, scenario, &result.run)?;
-                write(dir, "path.svg", &triskar_report::path_svg(result))?;
+                write_plot(dir, "path", &triskar_report::path_plot(result))?;
                 write(dir, "report.json", &json)?;
             }
         }

@@ -271,14 +271,26 @@ fn sim_out_streams_the_same_log_the_run_records() {
     let run = run_engine(&sc, &cfg, PolicyKind::Ours, Policy::OURS).unwrap();
     assert!(written.lines().count() > 1000);
     assert_eq!(written, rtcan_sim::candump::log(&run.wire, "can0"));
-    for f in [
-        "report.json",
-        "calendar.svg",
-        "hrt-jitter-ours.svg",
-        "srt-latency-ours.svg",
-    ] {
-        assert!(dir.join(f).exists(), "{f}");
+    assert!(dir.join("report.json").exists());
+    // Every plot has its numbers beside it; the calendar's CSV is the plan's (robot.toml's
+    // module names, the master's mask).
+    for f in ["calendar", "hrt-jitter-ours", "srt-latency-ours"] {
+        let svg = std::fs::read_to_string(dir.join(format!("{f}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg"), "{f}.svg");
+        let csv = std::fs::read_to_string(dir.join(format!("{f}.csv"))).unwrap();
+        assert!(csv.lines().count() > 1, "{f}.csv: {csv}");
     }
+    let calendar = std::fs::read_to_string(dir.join("calendar.csv")).unwrap();
+    let rows = rtcan_sim::plot::calendar_rows(&sc);
+    let bus = sc.bus().unwrap();
+    let mask = sc.masks().first().copied().unwrap();
+    let want = rtcan_sim::plot::calendar(bus.slots_per_cycle, mask, &rows).unwrap();
+    assert_eq!(calendar, want.csv);
+    assert!(calendar.starts_with("row,slot,topic\n"), "{calendar}");
+    assert_eq!(
+        calendar.lines().filter(|l| l.starts_with("mask,")).count(),
+        usize::from(bus.slots_per_cycle)
+    );
 }
 
 /// A line without end (`/dev/zero`-like input) is read in bounded pieces, each counted

@@ -115,6 +115,7 @@ pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
         gens,
         topics,
         master,
+        names: plan.modules.iter().map(|m| m.name.clone()).collect(),
     })
 }
 

@@ -103,6 +103,8 @@ pub struct Scenario {
     pub topics: Vec<TopicInfo>,
     /// Index of the master node.
     pub master: usize,
+    /// Every node's name (robot.toml's module names), for plots and reports.
+    pub names: Vec<String>,
 }
 
 impl Scenario {

@@ -238,91 +238,93 @@ pub fn triskar_value(r: &TriskarRun, speed_x: f64) -> serde_json::Value {
     })
 }
 
-/// Top view of the path (x, y in m) with the wall and the final footprint.
-pub fn path_svg(r: &TriskarRun) -> String {
-    let (w, h, m) = (640.0, 400.0, 40.0);
+/// The robot's path seen from above (m): the true path and the odometry the gateway
+/// received, the wall, and the final footprint; the CSV has both tracks.
+pub fn path_plot(r: &TriskarRun) -> Result<crate::plot::Plot, String> {
+    use crate::plot::{colour, svg};
+    use plotters::prelude::*;
     let wall = r.config.wall_x_m;
     let body = crate::plant::OmniGeometry::TRISKAR2.body_radius_m;
     let x0 = -0.5;
     let x1 = (wall + 0.3).min(r.max_x_m.max(0.0) + 1.0).max(1.0);
     let (y0, y1) = (-1.0, 1.0);
-    let sx = (w - 2.0 * m) / (x1 - x0);
-    let sy = (h - 2.0 * m) / (y1 - y0);
-    let k = sx.min(sy);
-    let px = |x: f64| m + (x - x0) * k;
-    let py = |y: f64| h / 2.0 - y * k;
-    let mut o = String::new();
-    let _ = writeln!(
-        o,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">"
-    );
-    let _ = writeln!(o, "<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>");
-    let _ = writeln!(
-        o,
-        "<text x=\"{m}\" y=\"20\">triskar2: path (top view, m), min gap {:.3} m</text>",
-        r.min_gap_m
-    );
-    // Metre grid.
-    let mut gx = x0.ceil();
-    while gx <= x1 {
-        let _ = writeln!(
-            o,
-            "<line x1=\"{0:.1}\" y1=\"{1:.1}\" x2=\"{0:.1}\" y2=\"{2:.1}\" stroke=\"#ddd\"/><text x=\"{0:.1}\" y=\"{3:.1}\">{gx}</text>",
-            px(gx),
-            py(y1),
-            py(y0),
-            py(y0) + 14.0
-        );
-        gx += 1.0;
-    }
-    if wall <= x1 {
-        let _ = writeln!(
-            o,
-            "<line x1=\"{0:.1}\" y1=\"{1:.1}\" x2=\"{0:.1}\" y2=\"{2:.1}\" stroke=\"black\" stroke-width=\"4\"/><text x=\"{3:.1}\" y=\"{4:.1}\">wall</text>",
-            px(wall),
-            py(y1),
-            py(y0),
-            px(wall) - 30.0,
-            py(y1) - 4.0
-        );
-    }
-    let pts: Vec<String> = r
-        .path
-        .iter()
-        .map(|p| format!("{:.1},{:.1}", px(p.pose.x), py(p.pose.y)))
-        .collect();
-    let _ = writeln!(
-        o,
-        "<polyline points=\"{}\" fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"2\"/>",
-        pts.join(" ")
-    );
-    let odo: Vec<String> = r
+    let truth: Vec<(f64, f64)> = r.path.iter().map(|p| (p.pose.x, p.pose.y)).collect();
+    let odo: Vec<(f64, f64)> = r
         .odometry
         .iter()
-        .step_by(5)
-        .map(|&(_, x, y, _)| format!("{:.1},{:.1}", px(f64::from(x)), py(f64::from(y))))
+        .map(|&(_, x, y, _)| (f64::from(x), f64::from(y)))
         .collect();
-    let _ = writeln!(
-        o,
-        "<polyline points=\"{}\" fill=\"none\" stroke=\"#ff7f0e\" stroke-dasharray=\"4 3\"/>",
-        odo.join(" ")
-    );
-    if let Some(p) = r.path.last() {
-        let _ = writeln!(
-            o,
-            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"{:.1}\" fill=\"none\" stroke=\"#1f77b4\"/>",
-            px(p.pose.x),
-            py(p.pose.y),
-            body * k
-        );
+    let last = truth.last().copied();
+    // Metres equal on both axes: the canvas keeps the plot's aspect ratio.
+    let w = 820u32;
+    let h = ((f64::from(w) - 90.0) * (y1 - y0) / (x1 - x0) + 110.0).clamp(260.0, 900.0) as u32;
+    let picture = svg(w, h, |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!(
+                    "triskar2: path from above, min gap to the wall {:.3} m",
+                    r.min_gap_m
+                ),
+                ("sans-serif", 16),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        chart
+            .configure_mesh()
+            .x_desc("x [m]")
+            .y_desc("y [m]")
+            .draw()?;
+        let (ct, co) = (colour(0), colour(4));
+        chart
+            .draw_series(odo.iter().map(|&p| Circle::new(p, 3, co.stroke_width(1))))?
+            .label("odometry at the gateway")
+            .legend(move |(x, y)| Circle::new((x + 8, y), 3, co.stroke_width(1)));
+        // The true path on top of the odometry it should match.
+        chart
+            .draw_series(LineSeries::new(truth.iter().copied(), ct.stroke_width(2)))?
+            .label("true path")
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], ct.stroke_width(2)));
+        if wall <= x1 {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    [(wall, y0), (wall, y1)],
+                    BLACK.stroke_width(4),
+                )))?
+                .label(format!("wall (x = {wall:.2} m)"))
+                .legend(|(x, y)| {
+                    PathElement::new([(x + 8, y - 6), (x + 8, y + 6)], BLACK.stroke_width(4))
+                });
+        }
+        if let Some((x, y)) = last {
+            // The footprint as a polygon in data coordinates (a circle element's radius
+            // is in pixels).
+            let ring: Vec<(f64, f64)> = (0..=48)
+                .map(|k| {
+                    let a = f64::from(k) / 48.0 * std::f64::consts::TAU;
+                    (x + body * a.cos(), y + body * a.sin())
+                })
+                .collect();
+            chart
+                .draw_series(std::iter::once(PathElement::new(ring, ct.stroke_width(1))))?
+                .label("final footprint")
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, ct.stroke_width(1)));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()?;
+        Ok(())
+    })?;
+    let mut csv = String::from("track,t_s,x_m,y_m\n");
+    for p in r.path.iter() {
+        let _ = writeln!(csv, "true,{},{},{}", s(p.t_ns), p.pose.x, p.pose.y);
     }
-    let _ = writeln!(
-        o,
-        "<text x=\"{m}\" y=\"{}\" fill=\"#1f77b4\">true path (final footprint circle)</text><text x=\"{}\" y=\"{}\" fill=\"#ff7f0e\">odometry at the gateway</text>",
-        h - 8.0,
-        m + 240.0,
-        h - 8.0
-    );
-    o.push_str("</svg>\n");
-    o
+    for &(t, x, y, _) in r.odometry.iter() {
+        let _ = writeln!(csv, "odometry,{},{x},{y}", s(t));
+    }
+    Ok(crate::plot::Plot { svg: picture, csv })
 }
