@@ -71,3 +71,45 @@ fn bad_values_are_refused_with_a_reason_and_bad_usage_exits_2() {
     assert_eq!(code, 2);
     assert!(err.contains("nonexistent.toml"), "{err}");
 }
+
+#[test]
+fn over_the_bus_an_absent_module_times_out_and_others_answer() {
+    // motor1 dies before the host asks: no reply within the timeout, exit 1.
+    let (code, out, err) = rtcan(&["param", "get", "motor1.kp", "--fault", "motor1:dies@0.2s"]);
+    assert_eq!((code, out.as_str()), (1, ""), "{err}");
+    assert_eq!(
+        err,
+        "error: motor1.kp: no reply from module motor1 within 50 ms (is it powered and on the bus?)\n"
+    );
+    let (code, _, err) = rtcan(&[
+        "param",
+        "set",
+        "motor1.kp",
+        "0.5",
+        "--fault",
+        "motor1:dies@0.2s",
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.ends_with("; the value may or may not have been applied\n"),
+        "{err}"
+    );
+    // proximity still answers while motor1 is dead.
+    let (code, out, err) = rtcan(&[
+        "param",
+        "set",
+        "proximity.stop_distance",
+        "0.3",
+        "--fault",
+        "motor1:dies@0.2s",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        out,
+        "proximity.stop_distance = 0.3 m  (f32 in [0.05, 1], default 0.25, persisted)\n"
+    );
+    // A fault naming no module: bad input.
+    let (code, _, err) = rtcan(&["param", "list", "--fault", "wheel9:dies@1s"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("wheel9"), "{err}");
+}
