@@ -95,8 +95,8 @@ enum Cmd {
     Bridge(bridge::Args),
     /// Module parameters, range-checked by the module (docs/SERVICES.md)
     ///
-    /// Every module's parameter server runs in this process on the simulated robot
-    /// (--sim); exit 1 when a module refuses a value.
+    /// Requests go over the simulated robot's bus (--sim) to the parameter server of
+    /// the module; exit 1 when a module refuses a value or does not answer.
     Param(param::Args),
     /// Firmware update over the bus (docs/SERVICES.md §4)
     ///

@@ -1,12 +1,23 @@
-//! `rtcan param list | get <node.name> | set <node.name> <value> [--sim robot.toml] [--json]`:
-//! parameters over the parameter protocol (docs/SERVICES.md §2). With `--sim` (the
-//! default, `robot.toml`) every module's parameter server runs in this process, on
-//! its F103 flash model; requests and replies go through the same 8-byte wire form as on
-//! the bus, and the module range-checks (a refused value is never applied).
+//! `rtcan param list | get <node.name> | set <node.name> <value> [--sim robot.toml]
+//! [--json] [--fault F]`: parameters over the bus (docs/SERVICES.md §2). With `--sim` (the
+//! default, `robot.toml`) the simulated Triskar2 runs with every module's parameter
+//! server on its own module (`rtcan_sim::param`: `rtcan_pubsub`'s server behind the
+//! module's engine); this command is the host behind the gateway: it sends each request
+//! as an NRT frame of the parameter channel and waits for the module's reply with a
+//! timeout. The module range-checks: a refused value is never applied.
+use rtcan_core::Nanos;
 use rtcan_model::params::{load, ParamDecl, ParamTy};
 use rtcan_model::read_source;
-use rtcan_pubsub::param::{serve, ParamSpec, ParamType, Refused, Reply, Request, Value};
+use rtcan_pubsub::param::{ParamType, Refused, Reply, Request, Value};
+use rtcan_sim::param::{specs, ParamBus, ParamJob, ParamOutcome};
+use rtcan_sim::run::SimConfig;
+use rtcan_sim::triskar::{self, TriskarConfig, MODULES};
 use std::path::Path;
+
+/// When the host sends its first request (the robot has synchronised by then).
+const START_NS: Nanos = 500_000_000;
+/// How long the host waits for each reply.
+const TIMEOUT_NS: Nanos = 50_000_000;
 
 fn ty(t: ParamTy) -> ParamType {
     match t {
@@ -18,12 +29,7 @@ fn ty(t: ParamTy) -> ParamType {
 }
 
 fn value(t: ParamTy, v: f64) -> Value {
-    match t {
-        ParamTy::F32 => Value::F32(v as f32),
-        ParamTy::I32 => Value::I32(v as i32),
-        ParamTy::U32 => Value::U32(v as u32),
-        ParamTy::Bool => Value::Bool(v != 0.0),
-    }
+    rtcan_sim::param::value(t, v)
 }
 
 fn show(v: Value) -> String {
@@ -50,54 +56,48 @@ fn parse_value(t: ParamTy, s: &str) -> Result<u32, String> {
         .map_err(|e| format!("`{s}` is not a {} ({e})", t.name()))
 }
 
-/// One simulated module's parameter server: the declarations, the live values, the
-/// refusals counted (the module's own `rtcan_pubsub::param::serve`).
-struct Server {
-    specs: Vec<ParamSpec>,
-    values: Vec<u32>,
-    refused: u32,
+/// Runs the simulated robot with the host's `requests` (each to the module serving the
+/// parameter); the outcomes in order.
+fn over_the_bus(
+    plan: &rtcan_model::Plan,
+    params: &[ParamDecl],
+    requests: Vec<(usize, Request)>,
+    faults: &[String],
+) -> Result<Vec<ParamOutcome>, String> {
+    triskar::check_plan(plan)
+        .map_err(|e| format!("{e}: `rtcan param` runs on the simulated workspace robot only"))?;
+    let faults = faults
+        .iter()
+        .map(|f| rtcan_sim::fault::parse(f, &MODULES))
+        .collect::<Result<Vec<_>, _>>()?;
+    let n = requests.len() as Nanos;
+    let job = ParamJob {
+        specs: specs(params, MODULES.len()),
+        requests: requests
+            .into_iter()
+            .map(|(m, r)| (START_NS, m, r))
+            .collect(),
+        timeout_ns: TIMEOUT_NS,
+    };
+    let cfg = TriskarConfig {
+        sim: SimConfig {
+            // Every request may take its whole timeout; a cycle of margin.
+            seconds: (START_NS + n * TIMEOUT_NS + 10_000_000) as f64 / 1e9,
+            record_wire: false,
+            ..SimConfig::default()
+        },
+        faults,
+        ..TriskarConfig::default()
+    };
+    let (_, log) = triskar::run_with_params(plan, &cfg, ParamBus::new(&job, MODULES.len()))?;
+    Ok(log.results)
 }
 
-impl Server {
-    fn serve(&mut self, req: &[u8]) -> [u8; 8] {
-        // In-process: no flash behind `persist` (the store is tested on its flash model).
-        serve(
-            &self.specs,
-            &mut self.values,
-            &mut self.refused,
-            req,
-            &mut |_, _| true,
-        )
-        .encode()
-    }
-}
-
-fn servers(params: &[ParamDecl], modules: usize) -> Vec<Server> {
-    let mut out: Vec<Server> = (0..modules)
-        .map(|_| Server {
-            specs: Vec::new(),
-            values: Vec::new(),
-            refused: 0,
-        })
-        .collect();
-    for p in params {
-        if let Some(s) = out.get_mut(p.module) {
-            // The CLI lives as long as the process: names and units are leaked once.
-            let name: &'static str = Box::leak(p.name.clone().into_boxed_str());
-            let unit: &'static str = Box::leak(p.unit.clone().into_boxed_str());
-            let spec = ParamSpec {
-                name,
-                default: value(p.ty, p.default),
-                min: value(p.ty, p.min),
-                max: value(p.ty, p.max),
-                unit,
-                persist: p.persist,
-            };
-            s.values.push(spec.default.bits());
-            s.specs.push(spec);
-        }
-    }
-    out
+/// Why a request got no value.
+enum Failed {
+    Refused(Refused),
+    /// No reply within the timeout.
+    Silent,
 }
 
 fn json_str(s: &str) -> String {
@@ -114,7 +114,7 @@ fn json_str(s: &str) -> String {
     o
 }
 
-/// `rtcan param`: every module's parameter server runs in this process (--sim).
+/// `rtcan param`: the host's requests over the simulated robot's bus (--sim).
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(subcommand)]
@@ -130,6 +130,9 @@ pub struct Args {
     /// One JSON object per parameter
     #[arg(long, global = true)]
     json: bool,
+    /// As `rtcan sim --fault`, e.g. motor1:dies@0.2s (repeatable)
+    #[arg(long, value_name = "F", global = true)]
+    fault: Vec<String>,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -151,7 +154,7 @@ enum Op {
     },
 }
 
-/// Exit code: 0 done, 1 refused by the module, 2 bad input or usage.
+/// Exit code: 0 done, 1 refused by the module or no reply, 2 bad input or usage.
 pub fn run(a: Args) -> i32 {
     let (json, robot) = (a.json, a.sim);
     let (plan, params) =
@@ -162,7 +165,6 @@ pub fn run(a: Args) -> i32 {
                 return 2;
             }
         };
-    let mut srv = servers(&params, plan.modules.len());
     let find = |name: &str| -> Result<&ParamDecl, String> {
         params.iter().find(|p| p.name == name).ok_or_else(|| {
             let known: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
@@ -176,20 +178,40 @@ pub fn run(a: Args) -> i32 {
             )
         })
     };
-    // One request to the module serving `p`, through the wire form.
-    let mut call = |p: &ParamDecl, req: Request| -> Result<Value, Refused> {
-        let bytes = req.encode();
-        let reply = srv
-            .get_mut(p.module)
-            .map(|s| s.serve(&bytes))
-            .and_then(|r| Reply::decode(&r));
-        match reply {
-            Some(Reply::Value { bits, .. }) => {
-                Value::from_bits(ty(p.ty), bits).ok_or(Refused::BadValue)
-            }
-            Some(Reply::Refused { why, .. }) => Err(why),
-            None => Err(Refused::BadRequest),
-        }
+    // The requests to the modules serving `ps`, over the bus; per request its value or
+    // why none.
+    let ask =
+        |ps: &[&ParamDecl], reqs: Vec<Request>| -> Result<Vec<Result<Value, Failed>>, String> {
+            let out = over_the_bus(
+                &plan,
+                &params,
+                ps.iter().map(|p| p.module).zip(reqs).collect(),
+                &a.fault,
+            )?;
+            Ok(ps
+                .iter()
+                .enumerate()
+                .map(|(i, p)| match out.get(i).and_then(|o| o.reply) {
+                    Some(Reply::Value { bits, .. }) => {
+                        Value::from_bits(ty(p.ty), bits).ok_or(Failed::Refused(Refused::BadValue))
+                    }
+                    Some(Reply::Refused { why, .. }) => Err(Failed::Refused(why)),
+                    None => Err(Failed::Silent),
+                })
+                .collect())
+        };
+    let module_name = |p: &ParamDecl| plan.modules.get(p.module).map_or("?", |m| m.name.as_str());
+    let silent = |p: &ParamDecl| {
+        format!(
+            "error: {}: no reply from module {} within {} ms (is it powered and on the bus?)",
+            p.name,
+            module_name(p),
+            TIMEOUT_NS / 1_000_000
+        )
+    };
+    let bad_input = |e: String| {
+        eprintln!("error: {e}");
+        2
     };
     let line = |p: &ParamDecl, v: Value| {
         if json {
@@ -225,12 +247,25 @@ pub fn run(a: Args) -> i32 {
     };
     match &a.op {
         Op::List => {
+            let ps: Vec<&ParamDecl> = params.iter().collect();
+            let reqs = ps
+                .iter()
+                .map(|p| Request::List { index: p.index })
+                .collect();
+            let got = match ask(&ps, reqs) {
+                Ok(g) => g,
+                Err(e) => return bad_input(e),
+            };
             let mut rows = Vec::new();
-            for p in &params {
-                match call(p, Request::List { index: p.index }) {
+            for (p, r) in ps.iter().zip(got) {
+                match r {
                     Ok(v) => rows.push(line(p, v)),
-                    Err(why) => {
+                    Err(Failed::Refused(why)) => {
                         eprintln!("error: {}: {}", p.name, why.reason());
+                        return 1;
+                    }
+                    Err(Failed::Silent) => {
+                        eprintln!("{}", silent(p));
                         return 1;
                     }
                 }
@@ -244,56 +279,64 @@ pub fn run(a: Args) -> i32 {
             }
             0
         }
-        Op::Get { name } => match find(name) {
-            Err(e) => {
-                eprintln!("error: {e}");
-                2
-            }
-            Ok(p) => match call(p, Request::Get { index: p.index }) {
-                Ok(v) => {
+        Op::Get { name } => {
+            let p = match find(name) {
+                Ok(p) => p,
+                Err(e) => return bad_input(e),
+            };
+            let got = match ask(&[p], vec![Request::Get { index: p.index }]) {
+                Ok(g) => g,
+                Err(e) => return bad_input(e),
+            };
+            match got.into_iter().next() {
+                Some(Ok(v)) => {
                     println!("{}", line(p, v));
                     0
                 }
-                Err(why) => {
+                Some(Err(Failed::Refused(why))) => {
                     eprintln!("error: {name}: {}", why.reason());
                     1
                 }
-            },
-        },
+                Some(Err(Failed::Silent)) | None => {
+                    eprintln!("{}", silent(p));
+                    1
+                }
+            }
+        }
         Op::Set { name, value: v } => {
             let p = match find(name) {
                 Ok(p) => p,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return 2;
-                }
+                Err(e) => return bad_input(e),
             };
             let bits = match parse_value(p.ty, v) {
                 Ok(b) => b,
-                Err(e) => {
-                    eprintln!("error: {name}: {e}");
-                    return 2;
-                }
+                Err(e) => return bad_input(format!("{name}: {e}")),
             };
-            match call(
-                p,
-                Request::Set {
-                    index: p.index,
-                    bits,
-                },
-            ) {
-                Ok(v) => {
+            let req = Request::Set {
+                index: p.index,
+                bits,
+            };
+            let got = match ask(&[p], vec![req]) {
+                Ok(g) => g,
+                Err(e) => return bad_input(e),
+            };
+            match got.into_iter().next() {
+                Some(Ok(v)) => {
                     println!("{}", line(p, v));
                     0
                 }
-                Err(why) => {
+                Some(Err(Failed::Refused(why))) => {
                     eprintln!(
                         "error: {name}: refused by module {}: {} (value {v}, range [{}, {}]); not applied",
-                        plan.modules.get(p.module).map_or("?", |m| m.name.as_str()),
+                        module_name(p),
                         why.reason(),
                         show(value(p.ty, p.min)),
                         show(value(p.ty, p.max)),
                     );
+                    1
+                }
+                Some(Err(Failed::Silent)) | None => {
+                    eprintln!("{}; the value may or may not have been applied", silent(p));
                     1
                 }
             }

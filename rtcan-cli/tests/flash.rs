@@ -94,7 +94,14 @@ fn flash_usage_errors() {
             &["flash", "--all", "--module", "psu"],
             "cannot be used with",
         ),
-        (&["flash", "--all", "--can", "can0"], "simulator only"),
+        (
+            &["flash", "--all", "--can", "can0"],
+            "(--serial PORT) only so far",
+        ),
+        (
+            &["flash", "--module", "psu", "--serial", "/nonexistent-tty"],
+            "--serial /nonexistent-tty",
+        ),
         (
             &["flash", "--module", "psu", "--image", "/nonexistent"],
             "/nonexistent",
@@ -104,4 +111,129 @@ fn flash_usage_errors() {
         assert_eq!(code, 2, "{args:?}");
         assert!(err.contains(msg), "{args:?}: {err}");
     }
+}
+
+/// The gateway thread's result: what motor1 and motor2 would boot, host-channel frames
+/// put on the bus and refused.
+type GatewayDone = std::thread::JoinHandle<(
+    Option<(usize, u32, u32)>,
+    Option<(usize, u32, u32)>,
+    u64,
+    u64,
+)>;
+
+/// A pty pair with the simulated robot's gateway on the master side (five times real
+/// time; every module with its update port, the gateway relaying the host channels)
+/// until `stop`; the slave's path.
+fn gateway_on_pty(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> (String, GatewayDone) {
+    use std::os::fd::FromRawFd;
+    let (mut m, mut s) = (0, 0);
+    let mut name = [0 as libc::c_char; 128];
+    // SAFETY: out-pointers to locals; the buffer holds any /dev/pts/N.
+    let rc = unsafe {
+        libc::openpty(
+            &mut m,
+            &mut s,
+            name.as_mut_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(rc, 0);
+    // SAFETY: m is open and ours.
+    unsafe {
+        let fl = libc::fcntl(m, libc::F_GETFL);
+        libc::fcntl(m, libc::F_SETFL, fl | libc::O_NONBLOCK);
+    }
+    // SAFETY: NUL-terminated by openpty.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_str()
+        .unwrap()
+        .to_string();
+    // Raw, no echo, before anyone talks on it (a pty starts cooked).
+    rtcan_host::serial::make_raw(s).unwrap();
+    // SAFETY: both fds are open; the Files own them from here on.
+    let (master, slave) = unsafe { (std::fs::File::from_raw_fd(m), std::fs::File::from_raw_fd(s)) };
+    let h = std::thread::spawn(move || {
+        let _slave = slave;
+        let plan = rtcan_model::Robot::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml"))
+            .map_err(|d| d.render())
+            .unwrap();
+        let cat = rtcan_sim::decode::plan_catalog(&plan);
+        let robot = rtcan_host::sim::SimLink::start_with_updates(&plan, 5.0).unwrap();
+        let mut gw = rtcan_host::gateway::SimGateway::new(robot, master, &cat, &plan.bridge.link);
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            gw.step(&mut |_| {}).unwrap();
+        }
+        (gw.booted(1), gw.booted(2), gw.relayed, gw.refused)
+    });
+    (path, h)
+}
+
+#[test]
+fn flash_through_the_gateway_serial_link_over_a_pty() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let plan = rtcan_model::Robot::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml"))
+        .map_err(|d| d.render())
+        .unwrap();
+    let img = rtcan_sim::update::test_image(2000, plan.fingerprint, 0x33);
+    let dir = std::env::temp_dir().join(format!("rtcan-flash-serial-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = dir.join("good.bin");
+    std::fs::write(&good, &img).unwrap();
+    let zeros = dir.join("zeros.bin");
+    std::fs::write(&zeros, vec![0u8; 2000]).unwrap();
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let (pty, gw) = gateway_on_pty(stop.clone());
+    let (code, out, err) = rtcan(&[
+        "flash",
+        "robot.toml",
+        "--module",
+        "motor1",
+        "--serial",
+        &pty,
+        "--image",
+        good.to_str().unwrap(),
+        "--json",
+        "--seconds",
+        "30",
+    ]);
+    // The wrong image to motor2: refused by the module at End, nothing committed.
+    let (code2, out2, err2) = rtcan(&[
+        "flash",
+        "robot.toml",
+        "--module",
+        "motor2",
+        "--serial",
+        &pty,
+        "--image",
+        zeros.to_str().unwrap(),
+        "--seconds",
+        "30",
+    ]);
+    stop.store(true, Ordering::Relaxed);
+    let (motor1, motor2, relayed, refused) = gw.join().unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    eprintln!("{out}{out2}");
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(v["module"], "motor1");
+    assert_eq!(v["bytes"], 2000);
+    // Begin, 8 Data of 250 bytes, End: 10 requests of 32 frames.
+    assert_eq!(v["frames"], 320);
+    assert_eq!(v["retries"], 0);
+    assert_eq!(v["ok"], true);
+    // Committed to the other slot: what motor1 boots now is the image sent.
+    assert_eq!(motor1, Some((1, 2000, rtcan_sim::update::crc(&img))));
+    assert_eq!(code2, 1, "{err2}");
+    assert!(
+        out2.contains("through the gateway link")
+            && out2.contains("motor2     2000 bytes, 320 frames, ")
+            && out2.contains("FAILED: refused by the module (Fingerprint)"),
+        "{out2}"
+    );
+    // motor2 still boots its factory image (slot 0, 4096 bytes).
+    assert_eq!(motor2.map(|(s, len, _)| (s, len)), Some((0, 4096)));
+    // Every request frame of both updates went onto the bus; none refused.
+    assert_eq!((relayed, refused), (640, 0));
 }

@@ -108,7 +108,7 @@ fn over_the_bus_an_absent_module_times_out_and_others_answer() {
         out,
         "proximity.stop_distance = 0.3 m  (f32 in [0.05, 1], default 0.25, persisted)\n"
     );
-    // A robot the simulator was not generated from, a bad fault: bad input.
+    // A fault naming no module: bad input.
     let (code, _, err) = rtcan(&["param", "list", "--fault", "wheel9:dies@1s"]);
     assert_eq!(code, 2);
     assert!(err.contains("wheel9"), "{err}");

@@ -11,8 +11,9 @@ const MAX_PAYLOAD: usize = 256;
 /// First heartbeat message ID and first topic message ID (§2.3).
 const HEARTBEAT_FIRST: u32 = 0x0100;
 const TOPIC_FIRST: u32 = 0x0140;
-/// PROTOCOL §2.3: first message ID of the update channel (firmware update, host-routed).
-const UPDATE_FIRST: u32 = 0xFF80;
+/// PROTOCOL §2.3: first message ID of the host channels (parameters `0xFF00..`, firmware
+/// update `0xFF80..`; host-routed).
+const UPDATE_FIRST: u32 = 0xFF00;
 /// The laxity of NRT frames (§2.1), which heartbeats must carry (§9).
 const NRT: u32 = 63;
 
@@ -136,7 +137,7 @@ impl Oracle {
         } else if (HEARTBEAT_FIRST..TOPIC_FIRST).contains(&msg) {
             self.heartbeat(laxity, msg, field, data);
         } else if msg >= UPDATE_FIRST {
-            // §2.3: the update channel (`0xFF80..=0xFFFF`) belongs to the host; the
+            // §2.3: the host channels (`0xFF00..=0xFFFF`) belong to the host; the
             // receive rules and their counters do not apply to it.
         } else {
             match self.topics.iter().position(|t| u32::from(t.msg_id) == msg) {

@@ -4,7 +4,10 @@
 //! pty. Robot → host: every message of a `link = "out"` topic the bus carries;
 //! host → robot: the `link = "in"` topics, published by the gateway on the bus (numbers
 //! and directions from robot.toml through the plan, as the firmware's generated
-//! `rtcan::robot_toml::link`).
+//! `rtcan::robot_toml::link`). Both ways, the host channels' bus frames (parameters,
+//! firmware update; `triskar2_link::BUS_FRAME`): from the host onto the bus if they are
+//! NRT frames of those channels (`rtcan_core::service::sendable`), every one the gateway
+//! receives back to the host — with a robot started by `SimLink::start_with_updates`.
 use std::io::{Read, Write};
 
 use rtcan_model::bridge_keys::{LinkDir, LinkTopic};
@@ -25,6 +28,9 @@ pub struct SimGateway<'c, P: Read + Write> {
     link: Vec<LinkTopic>,
     /// Frames written to the host.
     pub sent: u64,
+    /// Host-channel frames from the host put on the bus, and refused.
+    pub relayed: u64,
+    pub refused: u64,
 }
 
 impl<'c, P: Read + Write> SimGateway<'c, P> {
@@ -40,12 +46,19 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
             bus: BusDecoder::new(cat),
             cat,
             sent: 0,
+            relayed: 0,
+            refused: 0,
         }
     }
 
     /// Link counters of the host → robot direction.
     pub fn stats(&self) -> LinkStats {
         self.link_rx.stats()
+    }
+
+    /// What module `m` would boot now (slot, image length, CRC-32), with update ports.
+    pub fn booted(&self, m: usize) -> Option<(usize, u32, u32)> {
+        self.robot.booted(m)
     }
 
     /// Robot pose (x, y m).
@@ -64,8 +77,15 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
             Err(e) => return Err(format!("gateway link: {e}")),
         };
         let mut cmds = Vec::new();
+        let mut frames = Vec::new();
         for &b in buf.get(..n).unwrap_or(&[]) {
             if let Some((n, p)) = self.link_rx.push(b) {
+                if n == triskar2_link::BUS_FRAME {
+                    frames.push(triskar2_link::decode_bus_frame(p).and_then(|(raw, data)| {
+                        rtcan_core::Frame::new(rtcan_core::CanId::from_raw(raw)?, data)
+                    }));
+                    continue;
+                }
                 let to_robot = self
                     .link
                     .iter()
@@ -73,6 +93,12 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
                 if let Some(l) = to_robot {
                     cmds.push((l.name.clone(), p.to_vec()));
                 }
+            }
+        }
+        for f in frames {
+            match f {
+                Some(f) if self.robot.relay_to_bus(f) => self.relayed += 1,
+                _ => self.refused += 1,
             }
         }
         for (name, c) in cmds {
@@ -104,6 +130,13 @@ impl<'c, P: Read + Write> SimGateway<'c, P> {
             };
             let mut frame = [0u8; MAX_PAYLOAD + OVERHEAD];
             if let Some(k) = triskar2_link::encode(lt, &payload, &mut frame) {
+                out.extend_from_slice(frame.get(..k).unwrap_or(&[]));
+                self.sent += 1;
+            }
+        }
+        for f in self.robot.relay_from_bus() {
+            let mut frame = [0u8; MAX_PAYLOAD + OVERHEAD];
+            if let Some(k) = triskar2_link::encode_bus_frame(f.id().raw(), f.data(), &mut frame) {
                 out.extend_from_slice(frame.get(..k).unwrap_or(&[]));
                 self.sent += 1;
             }

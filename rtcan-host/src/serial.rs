@@ -4,7 +4,10 @@
 //! ID and fragmentation, `rtcan_core::fragment`), stamped with wall time since the link
 //! opened, so every command decodes it the same way. Which topics cross the link, with
 //! which numbers and in which direction, is robot.toml's `link` (the plan's
-//! `bridge.link`): the host sends the `link = "in"` topics.
+//! `bridge.link`): the host sends the `link = "in"` topics. The host channels' bus frames
+//! (parameters, firmware update: `triskar2_link::BUS_FRAME`) cross the link as the bus
+//! carries them: [`SerialLink::send_frame`] sends one through the gateway, `recv` hands
+//! out the ones the gateway forwards.
 use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::AsRawFd;
@@ -120,6 +123,32 @@ impl<P: Read + Write> SerialLink<P> {
     }
 }
 
+impl<P: Read + Write> SerialLink<P> {
+    /// Sends `frame` through the gateway onto the bus: only NRT frames of the host
+    /// channels (`rtcan_core::service::sendable`; the gateway refuses anything else).
+    pub fn send_frame(&mut self, frame: &Frame) -> Result<(), String> {
+        if !rtcan_core::service::sendable(frame) {
+            return Err(format!(
+                "identifier {:#010x}: the gateway forwards only NRT frames of the host channels \
+                 (message IDs {:#06x}..=0xFFFF)",
+                frame.id().raw(),
+                rtcan_core::service::SERVICE_MSG_ID_START
+            ));
+        }
+        let mut buf = [0u8; MAX_PAYLOAD + OVERHEAD];
+        let n = triskar2_link::encode_bus_frame(frame.id().raw(), frame.data(), &mut buf)
+            .ok_or("a bus frame does not fit a link frame")?;
+        self.port
+            .write_all(buf.get(..n).unwrap_or(&[]))
+            .map_err(|e| format!("serial link: {e}"))
+    }
+
+    /// Flushes what `send_frame` wrote.
+    pub fn flush(&mut self) -> Result<(), String> {
+        self.port.flush().map_err(|e| format!("serial link: {e}"))
+    }
+}
+
 impl<P: Read + Write> Link for SerialLink<P> {
     fn recv(&mut self) -> Result<Option<Vec<Stamped>>, String> {
         let mut buf = [0u8; 1024];
@@ -138,6 +167,18 @@ impl<P: Read + Write> Link for SerialLink<P> {
             }
         }
         for (t, p) in msgs {
+            if t == triskar2_link::BUS_FRAME {
+                // A bus frame the gateway forwarded as it is.
+                let frame = triskar2_link::decode_bus_frame(&p)
+                    .and_then(|(raw, data)| Frame::new(CanId::from_raw(raw)?, data));
+                if let Some(frame) = frame {
+                    out.push(Stamped {
+                        time_ns: self.now_ns,
+                        frame,
+                    });
+                }
+                continue;
+            }
             // Unknown link topics and wrong sizes are dropped (counted by the caller's
             // decoder as nothing: they never reach the bus view).
             if let Some(&(_, msg, size)) = self.topics.iter().find(|(n, _, _)| *n == t) {

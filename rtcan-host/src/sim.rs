@@ -27,17 +27,42 @@ pub struct SimLink {
 impl SimLink {
     /// Powers the robot of `plan` on (standing still until the host publishes `teleop`).
     pub fn start(plan: &rtcan_model::Plan, speed: f64) -> Result<Self, String> {
-        let live = Live::start(plan, 1)?;
+        Ok(Self::with(plan, Live::start(plan, 1)?, speed))
+    }
+
+    fn with(plan: &rtcan_model::Plan, live: Live, speed: f64) -> Self {
         let teleop = plan_catalog(plan)
             .topics
             .into_iter()
             .find(|t| t.name == "teleop");
-        Ok(SimLink {
+        SimLink {
             live,
             teleop,
             speed,
             started: Instant::now(),
-        })
+        }
+    }
+
+    /// [`SimLink::start`] with every module's firmware-update port on and the gateway
+    /// relaying the host channels (`rtcan_sim::live::Live::start_with_updates`).
+    pub fn start_with_updates(plan: &rtcan_model::Plan, speed: f64) -> Result<Self, String> {
+        Ok(Self::with(plan, Live::start_with_updates(plan, 1)?, speed))
+    }
+
+    /// The host-channel frame `frame` from the host for the bus; `false` if the gateway
+    /// refuses it (not an NRT frame of the host channels, or no update ports).
+    pub fn relay_to_bus(&mut self, frame: rtcan_core::Frame) -> bool {
+        self.live.relay_to_bus(frame)
+    }
+
+    /// The host-channel frames the gateway received from the bus since the last call.
+    pub fn relay_from_bus(&mut self) -> Vec<rtcan_core::Frame> {
+        self.live.relay_from_bus()
+    }
+
+    /// What module `m` would boot now: (slot, image length, CRC-32).
+    pub fn booted(&self, m: usize) -> Option<(usize, u32, u32)> {
+        self.live.booted(m)
     }
 
     /// Robot pose (x, y m) in the simulated world.

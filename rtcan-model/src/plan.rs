@@ -394,7 +394,7 @@ pub fn build_locked(
         Some(l) => crate::lock::assign_ids(model, l, &mut moves),
         None => ids::assign(model),
     };
-    // IDs from 0xFF80 are the update channel's (docs/PROTOCOL.md §2.3).
+    // IDs from 0xFF00 are the host channels' (parameters, update; docs/PROTOCOL.md §2.3).
     let below_services = |ids: &Vec<u16>| {
         ids.iter()
             .all(|&i| !rtcan_core::service::is_service(MsgId(i)))
@@ -403,7 +403,7 @@ pub fn build_locked(
         diags.push(Diagnostic::new(
             Code::TableTooLarge,
             None,
-            "too many topics for the message IDs below the update range (0x0140..0xFF80)",
+            "too many topics for the message IDs below the host channels (0x0140..0xFF00)",
         ));
         return None;
     };

@@ -1,7 +1,10 @@
 //! Typed parameters of a module (docs/SERVICES.md §2): their declaration, the range check
 //! the module applies before any value is taken (a refused value is never applied), and
 //! the get/set/list protocol carried over NRT. Names live on the host (robot.toml); the
-//! wire carries parameter indices in declaration order.
+//! wire carries parameter indices in declaration order. [`bus`] carries the protocol as
+//! NRT frames on the reserved parameter channel.
+
+pub mod bus;
 
 /// A parameter's type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

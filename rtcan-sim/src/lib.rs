@@ -32,6 +32,7 @@ pub mod ideal;
 pub mod live;
 pub mod metrics;
 pub mod paper;
+pub mod param;
 pub mod plant;
 pub mod plot;
 pub mod policy;

@@ -29,6 +29,18 @@ impl Live {
     /// Powers the robot of `plan` (the workspace robot.toml) on at time 0, standing
     /// still: no command until the host sends one.
     pub fn start(plan: &Plan, seed: u64) -> Result<Self, String> {
+        Self::start_with(plan, seed, false)
+    }
+
+    /// [`Live::start`] with every module's firmware-update port on (factory-flashed
+    /// slots, `update::UpdateBus::relay`) and the gateway relaying the host channels'
+    /// frames between the host (`relay_to_bus`, `relay_from_bus`) and the bus, as the
+    /// gateway firmware does for `rtcan flash --serial`.
+    pub fn start_with_updates(plan: &Plan, seed: u64) -> Result<Self, String> {
+        Self::start_with(plan, seed, true)
+    }
+
+    fn start_with(plan: &Plan, seed: u64, updates: bool) -> Result<Self, String> {
         triskar::check_plan(plan)?;
         let guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
         triskar::reset_all();
@@ -38,7 +50,24 @@ impl Live {
         cfg.command_vx = 0.0;
         // A wall far away, so a host can drive for a while.
         cfg.wall_x_m = 1000.0;
+        if updates {
+            // No target of its own: the host's frames drive the update (`relay`); the
+            // config only turns the update filter banks on.
+            cfg.update = Some(crate::update::UpdateJob {
+                targets: Vec::new(),
+                start_ns: 0,
+                config: rtcan_boot::sender::Config::default(),
+                flash: Vec::new(),
+                cut: None,
+            });
+        }
         let shared = triskar::new_shared(&cfg);
+        if updates {
+            shared.borrow_mut().update = Some(crate::update::UpdateBus::relay(
+                triskar::MODULES.len(),
+                robot::FINGERPRINT,
+            ));
+        }
         let mut bus = triskar::build_bus(&cfg, &shared)?;
         bus.record_wire = true;
         Ok(Live {
@@ -72,6 +101,31 @@ impl Live {
     pub fn pose_m(&self) -> (f64, f64) {
         let p = self.shared.borrow().physics.base.pose();
         (p.x, p.y)
+    }
+
+    /// A host-channel frame from the host for the bus (`update::UpdateBus::relay_to_bus`);
+    /// `false` if refused (not an NRT host-channel frame, or no update ports).
+    pub fn relay_to_bus(&mut self, frame: rtcan_core::Frame) -> bool {
+        self.shared
+            .borrow_mut()
+            .update
+            .as_mut()
+            .is_some_and(|u| u.relay_to_bus(frame))
+    }
+
+    /// The host-channel frames the gateway received since the last call.
+    pub fn relay_from_bus(&mut self) -> Vec<rtcan_core::Frame> {
+        self.shared
+            .borrow_mut()
+            .update
+            .as_mut()
+            .map(|u| u.relay_from_bus())
+            .unwrap_or_default()
+    }
+
+    /// What module `m` would boot now: (slot, image length, CRC-32).
+    pub fn booted(&self, m: usize) -> Option<(usize, u32, u32)> {
+        self.shared.borrow().update.as_ref()?.booted(m)
     }
 
     /// Module names in bus-index order.

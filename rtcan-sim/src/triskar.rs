@@ -208,12 +208,31 @@ pub fn run_with_services(
     cfg: &TriskarConfig,
     script: &services::ServiceScript,
 ) -> Result<(TriskarRun, services::ServiceLog), String> {
+    run_all(plan, cfg, script, None).map(|(r, s, _)| (r, s))
+}
+
+/// [`run`] with the host asking for parameters over the bus through the gateway
+/// (`param.rs`, `rtcan param`); also returns what the parameters did.
+pub fn run_with_params(
+    plan: &Plan,
+    cfg: &TriskarConfig,
+    params: crate::param::ParamBus,
+) -> Result<(TriskarRun, crate::param::ParamLog), String> {
+    run_all(plan, cfg, &services::ServiceScript::default(), Some(params)).map(|(r, _, p)| (r, p))
+}
+
+fn run_all(
+    plan: &Plan,
+    cfg: &TriskarConfig,
+    script: &services::ServiceScript,
+    params: Option<crate::param::ParamBus>,
+) -> Result<(TriskarRun, services::ServiceLog, crate::param::ParamLog), String> {
     check_plan(plan)?;
     let sc = crate::robot::scenario(plan, &[])?;
     // A panicking earlier run leaves the lock poisoned; the statics are reset anyway.
     let _guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
     reset_all();
-    let result = simulate(&sc, cfg, script);
+    let result = simulate(&sc, cfg, script, params);
     reset_all();
     result
 }
@@ -231,22 +250,24 @@ fn firmware_filter(filters: &[(u32, u32)]) -> Filter {
     )
 }
 
-/// `firmware_filter` plus the update channel's bank (docs/PROTOCOL.md §10): the
-/// gateway takes every module's replies (`0xFFC0..=0xFFFF`), a module its own requests
-/// (`0xFF80 + m`, any fragment), both NRT.
+/// `firmware_filter` plus the host channels' bank (docs/PROTOCOL.md §10), one bank for
+/// both channels: the gateway takes every module's replies (`0xFF40..=0xFF7F`
+/// parameters, `0xFFC0..=0xFFFF` update: message-ID mask `0xFF40`), a module its own
+/// requests (`0xFF00 + m` parameters, `0xFF80 + m` update, any fragment: mask `0xFF7F`),
+/// all NRT.
 fn update_filter(filters: &[(u32, u32)], module: usize) -> Filter {
     let Filter::Rules(mut rules) = firmware_filter(filters) else {
         return firmware_filter(filters);
     };
     let (id, mask) = if module == 0 {
         (
-            (63 << 23) | (u32::from(rtcan_core::service::UPDATE_REP_BASE) << 7),
-            (0x3F << 23) | (0xFFC0 << 7),
+            (63 << 23) | (u32::from(rtcan_core::service::PARAM_REP_BASE) << 7),
+            (0x3F << 23) | (0xFF40 << 7),
         )
     } else {
         (
-            (63 << 23) | ((u32::from(rtcan_core::service::UPDATE_REQ_BASE) + module as u32) << 7),
-            (0x3F << 23) | (0xFFFF << 7),
+            (63 << 23) | ((u32::from(rtcan_core::service::PARAM_REQ_BASE) + module as u32) << 7),
+            (0x3F << 23) | (0xFF7F << 7),
         )
     };
     rules.push((mask, id, 1));
@@ -347,6 +368,7 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
             .update
             .as_ref()
             .map(|j| crate::update::UpdateBus::new(j, MODULES.len(), robot::FINGERPRINT)),
+        params: None,
         services: services::ServiceLog::default(),
     }))
 }
@@ -388,6 +410,7 @@ pub(crate) fn build_bus(
     let mut bus: Bus<Box<dyn TriskarModule>> =
         Bus::new(bitrate, cfg.sim.bit_error_rate, cfg.sim.seed);
     bus.record_wire = true;
+    let host_channels = cfg.update.is_some() || shared.borrow().params.is_some();
     for n in 0..MODULES.len() {
         let clock = cfg.sim.clock(n);
         let now = clock.local(0);
@@ -485,9 +508,10 @@ pub(crate) fn build_bus(
                 clock,
                 irq_latency_ns: cfg.sim.node_irq_latency_ns(),
                 nart: false,
-                filter: match cfg.update {
-                    Some(_) => update_filter(filters, n),
-                    None => firmware_filter(filters),
+                filter: if host_channels {
+                    update_filter(filters, n)
+                } else {
+                    firmware_filter(filters)
                 },
                 cpu: cfg.sim.cpu.clone(),
             },
@@ -500,9 +524,11 @@ fn simulate(
     sc: &crate::run::Scenario,
     cfg: &TriskarConfig,
     script: &services::ServiceScript,
-) -> Result<(TriskarRun, services::ServiceLog), String> {
+    params: Option<crate::param::ParamBus>,
+) -> Result<(TriskarRun, services::ServiceLog, crate::param::ParamLog), String> {
     let shared = new_shared(cfg);
     shared.borrow_mut().services.script = script.clone();
+    shared.borrow_mut().params = params;
     let mut bus = build_bus(cfg, &shared)?;
     bus.set_eof_error_rate(cfg.sim.eof_error_rate);
     let faults = fault_script(cfg)?;
@@ -653,6 +679,7 @@ fn simulate(
     let odometry = std::mem::take(&mut sh.odometry);
     let odometry_rx = odometry.seen();
     let service_log = std::mem::take(&mut sh.services);
+    let param_log = sh.params.as_ref().map(|p| p.log()).unwrap_or_default();
     let run = TriskarRun {
         run: Run {
             policy: "ours",
@@ -692,7 +719,7 @@ fn simulate(
         slots_live: live.map_or((0, 0), |c| (c.bad, c.checked)),
         config: cfg.clone(),
     };
-    Ok((run, service_log))
+    Ok((run, service_log, param_log))
 }
 
 /// SRT latency per topic from the publications and their fates (`SrtLog`), streamed:

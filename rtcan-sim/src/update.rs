@@ -218,6 +218,16 @@ pub struct HostSide {
     link_at: Option<Nanos>,
     link_free: Nanos,
     pub results: Vec<UpdateResult>,
+    /// The gateway relays a real host's frames instead (`UpdateBus::relay`).
+    relay: Option<Relay>,
+}
+
+/// The gateway's side of a real host link (`rtcan flash --serial`): the host channels'
+/// frames from the host, queued for the bus in order; the frames the bus brought back.
+#[derive(Clone, Debug, Default)]
+struct Relay {
+    to_bus: VecDeque<Frame>,
+    from_bus: Vec<Frame>,
 }
 
 impl HostSide {
@@ -310,10 +320,49 @@ impl UpdateBus {
                 link_at: None,
                 link_free: 0,
                 results: Vec::new(),
+                relay: None,
             },
             modules: sides,
             fingerprint,
         }
+    }
+
+    /// Every module (not the gateway) with its update port on factory-flashed slots, and
+    /// the gateway relaying a real host's frames (`relay_to_bus`, `relay_from_bus`)
+    /// instead of running a sender.
+    pub fn relay(modules: usize, fingerprint: u32) -> Self {
+        let job = UpdateJob {
+            targets: Vec::new(),
+            start_ns: 0,
+            config: Config::default(),
+            flash: Vec::new(),
+            cut: None,
+        };
+        let mut u = UpdateBus::new(&job, modules, fingerprint);
+        u.host.relay = Some(Relay::default());
+        u
+    }
+
+    /// A frame from the host for the bus: queued if it is an NRT frame of the host
+    /// channels (`rtcan_core::service::sendable`), else refused (`false`): the link must
+    /// not let a host put a topic's or the sync's identifier on the bus.
+    pub fn relay_to_bus(&mut self, frame: Frame) -> bool {
+        match &mut self.host.relay {
+            Some(r) if rtcan_core::service::sendable(&frame) => {
+                r.to_bus.push_back(frame);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// The host channels' frames the gateway received since the last call.
+    pub fn relay_from_bus(&mut self) -> Vec<Frame> {
+        self.host
+            .relay
+            .as_mut()
+            .map(|r| std::mem::take(&mut r.from_bus))
+            .unwrap_or_default()
     }
 
     /// Module `m` was powered on again.
@@ -348,16 +397,89 @@ impl UpdateBus {
     }
 }
 
-/// The generated `ModuleHost` plus this module's side of the update channel, as the
-/// engine's `Host`.
+/// The generated `ModuleHost` plus this module's side of the host channels — the
+/// update channel and the parameter channel (`param.rs`) — as the engine's `Host`.
 pub(crate) struct WithUpdate<'a> {
     pub host: &'a mut ModuleHost<'static>,
     pub bus: Option<&'a mut UpdateBus>,
+    pub params: Option<&'a mut crate::param::ParamBus>,
     pub module: usize,
     /// Global time of the engine call.
     pub now: Nanos,
     /// A power cut hit this module: down for this long from `now`.
     pub cut: Option<Nanos>,
+}
+
+impl WithUpdate<'_> {
+    fn update_rx(&mut self, frame: &Frame) {
+        let Some(bus) = self.bus.as_deref_mut() else {
+            return;
+        };
+        let g = self.now;
+        if self.module == 0 {
+            if let Some(r) = &mut bus.host.relay {
+                r.from_bus.push(*frame);
+                return;
+            }
+            if let Some((_, _, s, _, last)) = &mut bus.host.current {
+                s.on_frame(frame, g);
+                *last = g;
+            }
+            bus.host.poll(g);
+        } else if let Some(Some(side)) = bus.modules.get_mut(self.module) {
+            self.cut = self.cut.or(side.rx(frame, g));
+        }
+    }
+
+    fn update_tx(&mut self) -> Option<Frame> {
+        let bus = self.bus.as_deref_mut()?;
+        let g = self.now;
+        if self.module == 0 {
+            let h = &mut bus.host;
+            if let Some(r) = &h.relay {
+                return r.to_bus.front().copied();
+            }
+            h.poll(g);
+            let (_, _, s, _, _) = h.current.as_mut()?;
+            let f = s.next_frame(g)?;
+            // A request's frames leave once the whole request came over the link.
+            let at = match h.link_at {
+                Some(at) => at,
+                None => {
+                    let at = h.link_free.max(g) + LINK_NS;
+                    h.link_at = Some(at);
+                    h.link_free = at;
+                    at
+                }
+            };
+            (g >= at).then_some(f)
+        } else {
+            bus.modules.get(self.module)?.as_ref()?.tx(g)
+        }
+    }
+
+    fn update_sent(&mut self) {
+        let Some(bus) = self.bus.as_deref_mut() else {
+            return;
+        };
+        let g = self.now;
+        if self.module == 0 {
+            if let Some(r) = &mut bus.host.relay {
+                r.to_bus.pop_front();
+                return;
+            }
+            if let Some((_, _, s, first, _)) = &mut bus.host.current {
+                s.sent(g);
+                first.get_or_insert(g);
+                // Every request is `REQUEST_FRAMES` frames: the next one needs the link.
+                if s.stats.frames % u32::from(rtcan_boot::can::REQUEST_FRAMES) == 0 {
+                    bus.host.link_at = None;
+                }
+            }
+        } else if let Some(Some(side)) = bus.modules.get_mut(self.module) {
+            side.sent();
+        }
+    }
 }
 
 impl Host for WithUpdate<'_> {
@@ -380,59 +502,57 @@ impl Host for WithUpdate<'_> {
         self.host.module_state()
     }
     fn service_rx(&mut self, frame: &Frame, _sof: Nanos) {
-        let Some(bus) = self.bus.as_deref_mut() else {
-            return;
-        };
-        let g = self.now;
-        if self.module == 0 {
-            if let Some((_, _, s, _, last)) = &mut bus.host.current {
-                s.on_frame(frame, g);
-                *last = g;
+        let (m, g) = (self.module, self.now);
+        if let Some(p) = self.params.as_deref_mut() {
+            if p.rx(m, frame, g) {
+                return;
             }
-            bus.host.poll(g);
-        } else if let Some(Some(side)) = bus.modules.get_mut(self.module) {
-            self.cut = self.cut.or(side.rx(frame, g));
         }
+        self.update_rx(frame);
     }
     fn service_tx(&mut self) -> Option<Frame> {
-        let bus = self.bus.as_deref_mut()?;
-        let g = self.now;
-        if self.module == 0 {
-            let h = &mut bus.host;
-            h.poll(g);
-            let (_, _, s, _, _) = h.current.as_mut()?;
-            let f = s.next_frame(g)?;
-            // A request's frames leave once the whole request came over the link.
-            let at = match h.link_at {
-                Some(at) => at,
-                None => {
-                    let at = h.link_free.max(g) + LINK_NS;
-                    h.link_at = Some(at);
-                    h.link_free = at;
-                    at
-                }
-            };
-            (g >= at).then_some(f)
-        } else {
-            bus.modules.get(self.module)?.as_ref()?.tx(g)
+        let (m, g) = (self.module, self.now);
+        let Some(p) = self.params.as_deref_mut() else {
+            return self.update_tx();
+        };
+        // The engine holds one host frame at a time, offered unchanged until sent: once
+        // a channel's frame is offered, that channel keeps the turn until
+        // `service_sent`. Parameters first (a short request overtakes a long update in
+        // progress).
+        let offered = p.offered.get(m).copied().flatten();
+        match offered {
+            Some(crate::param::Channel::Params) => return p.tx(m, g),
+            Some(crate::param::Channel::Update) => return self.update_tx(),
+            None => {}
         }
+        if let Some(f) = p.tx(m, g) {
+            if let Some(o) = p.offered.get_mut(m) {
+                *o = Some(crate::param::Channel::Params);
+            }
+            return Some(f);
+        }
+        let u = self.update_tx();
+        if u.is_some() {
+            if let Some(o) = self
+                .params
+                .as_deref_mut()
+                .and_then(|p| p.offered.get_mut(m))
+            {
+                *o = Some(crate::param::Channel::Update);
+            }
+        }
+        u
     }
     fn service_sent(&mut self) {
-        let Some(bus) = self.bus.as_deref_mut() else {
-            return;
+        let m = self.module;
+        let Some(p) = self.params.as_deref_mut() else {
+            return self.update_sent();
         };
-        let g = self.now;
-        if self.module == 0 {
-            if let Some((_, _, s, first, _)) = &mut bus.host.current {
-                s.sent(g);
-                first.get_or_insert(g);
-                // Every request is `REQUEST_FRAMES` frames: the next one needs the link.
-                if s.stats.frames % u32::from(rtcan_boot::can::REQUEST_FRAMES) == 0 {
-                    bus.host.link_at = None;
-                }
-            }
-        } else if let Some(Some(side)) = bus.modules.get_mut(self.module) {
-            side.sent();
+        match p.offered.get_mut(m).and_then(Option::take) {
+            Some(crate::param::Channel::Params) => p.sent(m),
+            Some(crate::param::Channel::Update) => self.update_sent(),
+            // Nothing offered: nothing to account.
+            None => {}
         }
     }
 }

@@ -36,6 +36,8 @@ pub struct Shared {
     pub last_log: String,
     /// A firmware update over the bus, if the run has one.
     pub update: Option<crate::update::UpdateBus>,
+    /// Parameters over the bus, if the run has them (`param.rs`).
+    pub params: Option<crate::param::ParamBus>,
     /// The `proximity_read` service: script, calls, answers (`services.rs`).
     pub services: super::services::ServiceLog,
 }
@@ -410,6 +412,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         if let Some(u) = self.shared.borrow_mut().update.as_mut() {
             u.power_on(self.index);
         }
+        if let Some(p) = self.shared.borrow_mut().params.as_mut() {
+            p.power_on(self.index);
+        }
         if let Some(svc) = self.service.as_mut() {
             svc.reboot(&mut self.shared.borrow_mut());
         }
@@ -437,9 +442,11 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         let g = self.clock.global_at(now);
         let shared = self.shared.clone();
         let mut sh = shared.borrow_mut();
+        let both = &mut *sh;
         let mut h = crate::update::WithUpdate {
             host: &mut self.host,
-            bus: sh.update.as_mut(),
+            bus: both.update.as_mut(),
+            params: both.params.as_mut(),
             module: self.index,
             now: g,
             cut: None,

@@ -93,6 +93,34 @@ pub fn encode(topic: u8, payload: &[u8], out: &mut [u8]) -> Option<usize> {
     Some(len + 1)
 }
 
+/// Link number of a bus frame of the host channels (parameters `0xFF00..`, firmware
+/// update `0xFF80..`, docs/PROTOCOL.md §2.3), carried as it is on the bus: link topics
+/// are numbered from 1, so 0 is free. Payload: the 29-bit identifier (u32 LE), then the
+/// frame's 0..=8 data bytes (the DLC is the rest of the payload). The gateway forwards
+/// such frames from the host to the bus only if they are NRT frames of the host
+/// channels, and every host-channel frame it receives from the bus to the host.
+pub const BUS_FRAME: u8 = 0;
+
+/// Writes the link frame carrying the bus frame `raw_id`/`data` into `out`; its length,
+/// or `None` for more than 8 data bytes or an `out` too short.
+pub fn encode_bus_frame(raw_id: u32, data: &[u8], out: &mut [u8]) -> Option<usize> {
+    if data.len() > 8 {
+        return None;
+    }
+    let mut payload = [0u8; 12];
+    payload.get_mut(..4)?.copy_from_slice(&raw_id.to_le_bytes());
+    payload.get_mut(4..4 + data.len())?.copy_from_slice(data);
+    encode(BUS_FRAME, payload.get(..4 + data.len())?, out)
+}
+
+/// The identifier and data of a `BUS_FRAME` payload; `None` if shorter than the
+/// identifier, longer than 8 data bytes or not a 29-bit identifier.
+pub fn decode_bus_frame(payload: &[u8]) -> Option<(u32, &[u8])> {
+    let (id, data) = (payload.get(..4)?, payload.get(4..)?);
+    let raw = u32::from_le_bytes([*id.first()?, *id.get(1)?, *id.get(2)?, *id.get(3)?]);
+    (data.len() <= 8 && raw < (1 << 29)).then_some((raw, data))
+}
+
 /// Link error counters (saturating).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LinkStats {
@@ -240,6 +268,42 @@ mod tests {
         let mut out = [0u8; MAX_PAYLOAD + OVERHEAD];
         let n = encode(topic, payload, &mut out).unwrap();
         out[..n].to_vec()
+    }
+
+    #[test]
+    fn bus_frames_round_trip_with_exact_bytes() {
+        // A parameter get to module 1 (identifier 0x1FFF8080).
+        let mut out = [0u8; MAX_PAYLOAD + OVERHEAD];
+        let n = encode_bus_frame(0x1FFF_8080, &[1, 0, 0, 0, 0, 0, 0, 0], &mut out).unwrap();
+        let f = &out[..n];
+        // COBS(topic, 12 bytes, CRC) = 16 bytes, and the delimiter.
+        assert_eq!(n, 17);
+        let mut d = Decoder::new();
+        let got = frames(&mut d, f);
+        assert_eq!(
+            got,
+            vec![(
+                BUS_FRAME,
+                vec![0x80, 0x80, 0xFF, 0x1F, 1, 0, 0, 0, 0, 0, 0, 0]
+            )]
+        );
+        assert_eq!(
+            decode_bus_frame(&got[0].1),
+            Some((0x1FFF_8080, &[1u8, 0, 0, 0, 0, 0, 0, 0][..]))
+        );
+        // An empty frame, and what is refused.
+        assert_eq!(
+            decode_bus_frame(&[1, 2, 3, 0]),
+            Some((0x0003_0201, &[][..]))
+        );
+        assert_eq!(decode_bus_frame(&[1, 2, 3]), None);
+        assert_eq!(
+            decode_bus_frame(&[0, 0, 0, 0x20]),
+            None,
+            "30-bit identifier"
+        );
+        assert_eq!(decode_bus_frame(&[0; 13]), None, "9 data bytes");
+        assert_eq!(encode_bus_frame(1, &[0; 9], &mut out), None);
     }
 
     #[test]
