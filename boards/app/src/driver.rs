@@ -7,8 +7,8 @@
 //! | `slot_timer` (TIM2) | 4, highest | commit the prepared plan: TXRQ of the slot's frame, aborts |
 //! | `can_rx`, `can_tx`, `can_sce` | 3 | registers into lock-free queues; bus-off: abort all |
 //! | `protocol` (EXTI1) | 2 | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up |
-//! | `module_app` | 1 | the module's nodes |
-//! | SysTick (monotonic) | lowest | wakes the app task |
+//! | `module_app` | 1 | the module's nodes, woken at their due times by the protocol task (slot clock) |
+//! | SysTick (monotonic) | lowest | backs up the app task's wake-up |
 //!
 //! Only the slot-timer resource (`glue::Core`: TIM2, plan, TX mailboxes) is shared across
 //! priorities; its critical sections are a few dozen instructions (QEMU row
