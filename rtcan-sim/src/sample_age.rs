@@ -170,7 +170,7 @@ impl AgeMeter {
             return;
         }
         let fresh: Vec<usize> = (0..MAILBOXES)
-            .filter(|&m| !before[m] && can.mailbox(m).is_some())
+            .filter(|&m| before.get(m) == Some(&false) && can.mailbox(m).is_some())
             .collect();
         if fresh.len() != taken.n {
             self.unpaired += taken.n as u64;
