@@ -90,7 +90,12 @@ fn kapeck_workspace_has_one_image_per_module_and_one_file_per_node() {
     assert!(pid.contains("use crate::robot::motor_left::nodes::pid_left as io;"));
     assert!(pid.contains("io::encoder_left_pub().send(value, now)"));
     assert!(pid.contains("io::wheel_refs_sub().try_recv()"));
-    assert!(pid.contains("encoder_left: Every::new(10000000),"));
+    // HRT: synchronous (lead before each slot, R2P §3.4.5), the period before sync.
+    assert!(pid.contains(
+        "encoder_left: rtcan::pubsub::SlotEvery::new(io::ENCODER_LEFT_SLOTS, 10000000),"
+    ));
+    assert!(pid
+        .contains("if self.encoder_left.due(now, robot::motor_left::STATUS.grid()) && running {"));
     assert!(pid.contains("robot::Encoder::default()"));
     assert!(
         !pid.contains("sonar") && !pid.contains("encoder_right"),

@@ -122,6 +122,44 @@ pub fn pool_errors(plan: &Plan) -> TokenStream {
     quote! { #(#errs)* }
 }
 
+/// `<TOPIC>_SLOTS` of an HRT topic's publisher: its slots on the bus and its lead time
+/// (R2P §3.4.5 synchronous publishers); `None` for a topic that stays on its module
+/// (no slot: the publisher runs at its period).
+fn hrt_slots(plan: &Plan, t: &TopicPlan) -> TokenStream {
+    let c = names::ident(&format!("{}_SLOTS", t.name.to_ascii_uppercase()));
+    let doc = format!(
+        "Topic `{}`'s HRT slots and its publisher's lead time (robot.toml `lead`): run the publisher at `next_due` (`rtcan::pubsub::SlotEvery`).",
+        t.name
+    );
+    let value = match (t.phase_slot, t.period_slots, t.lead_ns) {
+        (Some(phase), Some(period), Some(lead)) => {
+            let b = &plan.bus;
+            let (phase, period) = (lit::int(phase), lit::int(period));
+            let (slots, slot_ns, cycle_ns, lead) = (
+                lit::int(u32::from(b.slots_per_cycle)),
+                lit::int(b.slot_ns),
+                lit::int(b.cycle_ns),
+                lit::int(lead),
+            );
+            quote! {
+                Some(::rtcan::pubsub::HrtSlots {
+                    phase_slot: #phase,
+                    period_slots: #period,
+                    slots_per_cycle: #slots,
+                    slot_ns: #slot_ns,
+                    cycle_ns: #cycle_ns,
+                    lead_ns: #lead,
+                })
+            }
+        }
+        _ => quote! { None },
+    };
+    quote! {
+        #[doc = #doc]
+        pub const #c: Option<::rtcan::pubsub::HrtSlots> = #value;
+    }
+}
+
 /// The generated `pub mod <name>` of module `mi`.
 pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
     let (Some(m), Some(t)) = (plan.modules.get(mi), plan.tables(mi)) else {
@@ -234,6 +272,9 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
                         super::super::topics::#c.publisher()
                     }
                 });
+            }
+            if t.publisher == *ni && t.class == Class::Hrt {
+                out.push(hrt_slots(plan, t));
             }
             if let Some(slot) = l.subs.iter().position(|s| s == ni) {
                 let f = names::ident(&format!("{}_sub", t.name));

@@ -328,20 +328,33 @@ fn node_file(plan: &Plan, n: usize) -> String {
          //! The default body publishes zero values at each topic's rate once the node runs\n\
          //! and counts what it receives; replace it with the node's work.\n\
          use crate::robot;\nuse crate::robot::{module}::nodes::{name} as io;\n\
-         use crate::support::{{run_node, Every, Nanos, Tally}};\n\n\
+         use crate::support::{{run_node, {every}Nanos, Tally}};\n\n\
          /// Node `{name}`.\npub struct {ty} {{\n",
         name = node.name,
         prio = node.priority,
         p = list(&pubs),
         q = list(&subs),
+        every = if pubs.iter().any(|t| t.class != Class::Hrt) {
+            "Every, "
+        } else {
+            ""
+        },
     );
+    // HRT publishers are synchronous (R2P §3.4.5): `lead` before each of their slots
+    // once the module is synchronised (`SlotEvery` on the generated `<TOPIC>_SLOTS`).
+    let sync = |t: &rtcan_model::TopicPlan| t.class == Class::Hrt;
     for t in &pubs {
         s.push_str(&format!(
-            "    /// When `{}` ({} {}) is next published.\n    {}: Every,\n",
+            "    /// When `{}` ({} {}) is next published.\n    {}: {},\n",
             t.name,
             class_name(t.class),
             type_name(plan, t),
-            t.name
+            t.name,
+            if sync(t) {
+                "rtcan::pubsub::SlotEvery"
+            } else {
+                "Every"
+            }
         ));
     }
     for t in &subs {
@@ -356,16 +369,25 @@ fn node_file(plan: &Plan, n: usize) -> String {
          impl {ty} {{\n    pub const fn new() -> Self {{\n        {ty} {{\n"
     ));
     for t in &pubs {
+        let period = publish_period_ns(plan, t);
+        let init = if sync(t) {
+            format!(
+                "rtcan::pubsub::SlotEvery::new(io::{}_SLOTS, {period})",
+                t.name.to_ascii_uppercase()
+            )
+        } else {
+            format!("Every::new({period})")
+        };
         s.push_str(&format!(
-            "            // {} ns: {}.\n            {}: Every::new({}),\n",
-            publish_period_ns(plan, t),
+            "            // {} ns: {}.\n            {}: {init},\n",
+            period,
             match (t.class, t.period_slots) {
-                (Class::Hrt, Some(p)) => format!("{p} slots, its HRT period"),
+                (Class::Hrt, Some(p)) =>
+                    format!("{p} slots, its HRT period; `lead` before each slot once synchronised"),
                 _ if t.rate_hz.is_some() => "1 / its declared rate".to_string(),
                 _ => "no rate declared: 10 Hz".to_string(),
             },
             t.name,
-            publish_period_ns(plan, t)
         ));
     }
     for t in &subs {
@@ -390,8 +412,13 @@ fn node_file(plan: &Plan, n: usize) -> String {
     } else {
         s.push_str("        let mut next = Nanos::MAX;\n");
         for t in &pubs {
+            let due = if sync(t) {
+                format!("due(now, robot::{module}::STATUS.grid())")
+            } else {
+                "due(now)".to_string()
+            };
             s.push_str(&format!(
-                "        if self.{0}.due(now) && running {{\n            let value = robot::{1}::default();\n            self.tally.count(io::{0}_pub().send(value, now));\n        }}\n        next = next.min(self.{0}.next());\n",
+                "        if self.{0}.{due} && running {{\n            let value = robot::{1}::default();\n            self.tally.count(io::{0}_pub().send(value, now));\n        }}\n        next = next.min(self.{0}.next());\n",
                 t.name,
                 type_name(plan, t)
             ));

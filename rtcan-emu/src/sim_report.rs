@@ -230,6 +230,9 @@ pub fn triskar_run(
             error_state: rtcan_core::confinement::ErrorState::default(),
             fifo_overruns: 0,
             guardian_cut_at: None,
+            // Sample age is measured by the emulator's own trace (tests/robot.rs), not
+            // carried into this report.
+            sample_age: Vec::new(),
         });
     }
     let path = std::mem::take(&mut robot.physics.path).into_vec();

@@ -269,6 +269,9 @@ pub struct Topic {
     pub deadline_ns: Option<u64>,
     /// SRT/NRT: average message rate used for the bus-load check (none = not counted).
     pub rate_hz: Option<f64>,
+    /// HRT: how long before each of its slots the publisher runs, ns (`lead`, default
+    /// [`crate::validate::DEFAULT_HRT_LEAD_NS`]).
+    pub lead_ns: Option<u64>,
     /// Subscribers in file order.
     pub subscribers: Vec<Subscriber>,
     /// Spans.

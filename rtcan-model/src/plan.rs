@@ -105,6 +105,8 @@ pub struct TopicPlan {
     pub deadline_ns: Option<u64>,
     /// SRT/NRT: declared average rate, Hz.
     pub rate_hz: Option<f64>,
+    /// HRT: how long before each of its slots the publisher runs, ns (`lead`).
+    pub lead_ns: Option<u64>,
 }
 
 impl TopicPlan {
@@ -435,6 +437,7 @@ pub fn build_locked(
             requested_period_ns: t.requested_period_ns,
             deadline_ns: t.deadline_ns,
             rate_hz: t.rate_hz,
+            lead_ns: t.lead_ns,
         });
     }
 

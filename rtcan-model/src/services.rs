@@ -579,6 +579,7 @@ fn service(s: &Entry, model: &mut Model, items: &mut Vec<Diagnostic>) -> Option<
         requested_period_ns: None,
         deadline_ns: Some(deadline_ns),
         rate_hz,
+        lead_ns: None,
         subscribers: vec![Subscriber {
             node: to,
             queue: in_flight,

@@ -39,6 +39,7 @@ const TOPIC_KEYS: &[&str] = &[
     "period",
     "period_slots",
     "deadline",
+    "lead",
     "subscribers",
     "queue",
     // Outside-world keys, read by `bridge_keys`.
@@ -53,6 +54,10 @@ const SUB_KEYS: &[&str] = &["node", "queue"];
 pub const MAX_MODULES: usize = 64;
 /// Highest node priority (Cortex-M3 NVIC as used by RTIC on the F103: 4 bits).
 pub const MAX_PRIORITY: i64 = 15;
+/// Default lead time of an HRT publisher (`lead`), ns: room for a node callback of a few
+/// hundred µs on a 72 MHz Cortex-M3 before the frame is prepared. Raised to one slot
+/// and capped at the topic's period where those demand it.
+pub const DEFAULT_HRT_LEAD_NS: u64 = 500_000;
 
 struct V<'d> {
     diags: &'d mut Vec<Diagnostic>,
@@ -1075,6 +1080,7 @@ fn topic(
     });
     let deadline = get(t, "deadline");
     spans.deadline = deadline.and_then(|d| d.value.span.clone());
+    let lead = get(t, "lead");
 
     let class = class?;
     let mut period_slots = None;
@@ -1117,6 +1123,7 @@ fn topic(
             }
         }
     }
+    let lead_ns = hrt_lead(v, &e.key, class, lead, period_slots, bus);
     let (ty, publisher) = (ty?, publisher?);
 
     if let (Some(dl), Some(bus), Some(mt)) = (deadline_ns, bus, types.get(ty)) {
@@ -1150,9 +1157,64 @@ fn topic(
         requested_period_ns: requested_ns.filter(|_| class == Class::Hrt),
         deadline_ns,
         rate_hz,
+        lead_ns,
         subscribers: subscribers?,
         spans,
     })
+}
+
+/// Lead time of an HRT topic's publisher (`lead`, R2P §3.4.5 synchronous publishers):
+/// its callback runs this long before each of the topic's slots, so the sample is at
+/// most this old on the bus. At least one slot: the images prepare a slot's frame half
+/// a slot ahead (boards/app `Driver`), and the callback must have published by then.
+/// At most the topic's period, or the callback would run for two instances at once. `None` for SRT/NRT (a `lead` there is an error) and for unplanned periods.
+fn hrt_lead(
+    v: &mut V<'_>,
+    topic: &str,
+    class: Class,
+    lead: Option<&Entry>,
+    period_slots: Option<u32>,
+    bus: Option<&Bus>,
+) -> Option<u64> {
+    if class != Class::Hrt {
+        if let Some(l) = lead {
+            v.push(
+                Diagnostic::new(
+                    Code::ClassMismatch,
+                    l.key_span.clone(),
+                    format!("topic `{topic}` is not HRT: `lead` applies to HRT topics"),
+                )
+                .help("SRT/NRT publishers run when they have data; remove `lead` or make the topic `class = \"hrt\"`"),
+            );
+        }
+        return None;
+    }
+    let (bus, period) = (bus?, u64::from(period_slots?));
+    let period_ns = period.saturating_mul(bus.slot_ns);
+    let Some(l) = lead else {
+        return Some(DEFAULT_HRT_LEAD_NS.max(bus.slot_ns).min(period_ns));
+    };
+    let ns = v.parsed(l, "`lead`", units::duration_ns)?;
+    if ns < bus.slot_ns || ns > period_ns {
+        let at = l.value.span.clone();
+        v.push(
+            Diagnostic::new(
+                Code::BadValue,
+                at,
+                format!(
+                    "HRT topic `{topic}`: `lead` of {} is outside one slot ({}) ..= its period ({period} slots = {period_ns} ns)",
+                    units::fmt_ns(ns as f64),
+                    units::fmt_ns(bus.slot_ns as f64),
+                ),
+            )
+            .help(format!(
+                "give `lead` from {} (the frame is prepared half a slot ahead) to {period_ns}ns",
+                units::fmt_ns(bus.slot_ns as f64),
+            )),
+        );
+        return None;
+    }
+    Some(ns)
 }
 
 fn queue_zero(span: Option<Span>, topic: &str) -> Diagnostic {

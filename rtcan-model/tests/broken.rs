@@ -58,6 +58,12 @@ const CASES: &[(&str, &[Code], Status)] = &[
     ),
     ("unknown-board", &[Code::UnknownBoard], Status::Invalid),
     ("class-mismatch", &[Code::ClassMismatch], Status::Invalid),
+    ("lead-not-hrt", &[Code::ClassMismatch], Status::Invalid),
+    (
+        "hrt-lead-out-of-range",
+        &[Code::BadValue, Code::BadValue],
+        Status::Invalid,
+    ),
     ("queue-zero", &[Code::QueueZero], Status::Invalid),
     (
         "period-not-representable",

@@ -23,6 +23,9 @@ pub trait TxPort: Sync {
     fn payload(&self, token: Token) -> &[u8];
     /// The engine is done: counts the outcome, raises flags, releases the block.
     fn tx_done(&self, token: Option<Token>, outcome: TxOutcome);
+    /// When the block the engine holds as `token` was published (sample age at
+    /// transmission); `None` for a token it does not hold.
+    fn published_at(&self, token: Token) -> Option<Nanos>;
     /// Oldest SRT/NRT message waiting for `Engine::submit`.
     fn pending(&self) -> Option<Token>;
     /// `token` left the head of the queue: accepted by the engine (reference moves
@@ -45,6 +48,9 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> TxPort for Topi
     }
     fn tx_done(&self, token: Option<Token>, outcome: TxOutcome) {
         self.engine_done(token, outcome);
+    }
+    fn published_at(&self, token: Token) -> Option<Nanos> {
+        self.engine_stamp(token)
     }
     fn pending(&self) -> Option<Token> {
         self.pending_peek()
@@ -95,6 +101,18 @@ impl<'a> ModuleHost<'a> {
             nodes,
             bad_index: 0,
         }
+    }
+
+    /// When the message behind engine token `token` (`join(tx, block)`) was published:
+    /// what the simulator subtracts from its frame's SOF (sample age at transmission).
+    pub fn published_at(&self, token: Token) -> Option<Nanos> {
+        let (tx, block) = split(token);
+        self.tx.get(usize::from(tx))?.published_at(block)
+    }
+
+    /// The module's system status (the protocol side writes the slot grid into it).
+    pub fn status(&self) -> &'a SystemStatus {
+        self.status
     }
 
     /// Calls from the engine with a topic index outside the tables (a table mismatch).

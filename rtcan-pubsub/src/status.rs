@@ -7,6 +7,7 @@ use critical_section::Mutex;
 use rtcan_core::driver::Event;
 
 use crate::node::NodeState;
+use crate::slot_grid::SlotGrid;
 
 /// Safety parameters of a module (generated from robot.toml).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,6 +45,8 @@ struct StatusState {
     /// Cycles since each module's last heartbeat (saturating; meaningful where `heard`).
     ages: [u16; 64],
     sync_losses: u32,
+    /// The slot grid on the local clock while synchronised (synchronous HRT publishers).
+    grid: Option<SlotGrid>,
 }
 
 const POWER_ON: StatusState = StatusState {
@@ -56,6 +59,7 @@ const POWER_ON: StatusState = StatusState {
     states: [0; 64],
     ages: [0; 64],
     sync_losses: 0,
+    grid: None,
 };
 
 /// One cycle passed: every heartbeat (the master's included) is a cycle older.
@@ -251,6 +255,17 @@ impl SystemStatus {
     /// module states, no mismatch, no sync losses. For restarting a simulated module.
     pub fn clear(&self) {
         self.with(|st| *st = POWER_ON);
+    }
+
+    /// The slot grid on the local clock, written by the protocol side while the engine
+    /// is synchronised (`None`: not synchronised, or not written yet).
+    pub fn set_grid(&self, grid: Option<SlotGrid>) {
+        self.with(|st| st.grid = grid);
+    }
+
+    /// The slot grid last written (see [`SlotGrid`]): when HRT publishers are due.
+    pub fn grid(&self) -> Option<SlotGrid> {
+        self.with(|st| st.grid)
     }
 
     /// Clears the latched fingerprint mismatch (after the operator fixed the robot).

@@ -584,6 +584,13 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         })
     }
 
+    /// When the block the engine holds as `token` was published (the `now` given to
+    /// `send`/`publish`); `None` for a token the bus side does not hold.
+    pub(crate) fn engine_stamp(&self, token: Token) -> Option<Nanos> {
+        let idx = u8::try_from(token.0).ok()?;
+        self.with_quiet(|st| (st.remote.held & bit(idx) != 0).then(|| st.pool.stamp(idx)))
+    }
+
     /// The engine finished with `token`.
     pub(crate) fn engine_done(&self, token: Option<Token>, outcome: TxOutcome) {
         self.with(|st| {

@@ -13,12 +13,13 @@ use rtcan_core::driver::{Mailbox, TxResult};
 use rtcan_core::engine::Engine;
 use rtcan_core::{Frame, Nanos};
 use rtcan_model::Plan;
-use rtcan_pubsub::{ModuleHost, SystemStatus};
+use rtcan_pubsub::{ModuleHost, SlotGrid, SystemStatus};
 
 use crate::bus::{Bus, Module, NodeSetup};
 use crate::controller::{Filter, SimController};
 use crate::metrics::{Figures, Meter};
 use crate::run::{window, SimConfig, CHUNK_NS};
+use crate::sample_age::{AgeMeter, AgeStat, Tap};
 
 /// A module's app as its image runs it: `poll` runs what is due at local time `now` and
 /// returns the local time it is next due.
@@ -40,6 +41,7 @@ pub struct AppModule<const RX: usize, const AR: usize, const Q: usize, A: PollAp
     host: ModuleHost<'static>,
     status: &'static SystemStatus,
     app: A,
+    ages: AgeMeter,
 }
 
 impl<const RX: usize, const AR: usize, const Q: usize, A: PollApp> AppModule<RX, AR, Q, A> {
@@ -57,15 +59,27 @@ impl<const RX: usize, const AR: usize, const Q: usize, A: PollApp> AppModule<RX,
             host,
             status,
             app,
+            ages: AgeMeter::default(),
         }
     }
 
     /// The app task's turn after a driver event, then the pump into the engine and the
     /// engine's timer (the order of the firmware's app and protocol tasks).
     fn step(&mut self, now: Nanos, can: &mut SimController) -> Option<Nanos> {
+        // The slot grid the image's protocol task hands its app (synchronous HRT
+        // publishers run `lead` before their slots on it).
+        let grid = if self.engine.is_synced() {
+            SlotGrid::of_clock(self.engine.clock(), now)
+        } else {
+            None
+        };
+        self.status.set_grid(grid);
         let app_next = self.app.poll(now);
         self.host.pump(&mut self.engine, now, can);
-        let e = self.engine.poll(now, can, &mut self.host);
+        let before = AgeMeter::loaded(can);
+        let mut tap = Tap::new(&mut self.host);
+        let e = self.engine.poll(now, can, &mut tap);
+        self.ages.after_poll(before, &tap.taken, can);
         self.host.pump(&mut self.engine, now, can);
         // Nothing due (an app of subscribers only, an idle engine): no timer armed; a
         // timer at `Nanos::MAX` would overflow the local-to-global clock conversion.
@@ -104,6 +118,8 @@ impl<const RX: usize, const AR: usize, const Q: usize, A: PollApp> Module
         now: Nanos,
         can: &mut SimController,
     ) -> Option<Nanos> {
+        let ok = matches!(result, TxResult::Sent);
+        self.ages.on_tx_done(usize::from(mailbox.0), ok, now, can);
         self.engine
             .on_tx_done(mailbox, result, now, can, &mut self.host);
         self.step(now, can)
@@ -134,6 +150,8 @@ pub trait AppSim: Module {
     fn safe_now(&self) -> bool;
     /// (published, publish errors, received) of its nodes.
     fn traffic(&self) -> (u64, u64, u64);
+    /// Age of its HRT samples at transmission (publish → SOF of the first frame).
+    fn sample_age(&self) -> AgeStat;
 }
 
 impl<const RX: usize, const AR: usize, const Q: usize, A: PollApp> AppSim
@@ -157,6 +175,9 @@ impl<const RX: usize, const AR: usize, const Q: usize, A: PollApp> AppSim
             self.app.publish_errors(),
             self.app.received(),
         )
+    }
+    fn sample_age(&self) -> AgeStat {
+        self.ages.total()
     }
 }
 
@@ -218,6 +239,8 @@ pub struct AppModuleReport {
     pub published: u64,
     pub publish_errors: u64,
     pub received: u64,
+    /// Age of its HRT samples at transmission (publish → SOF of the first frame).
+    pub sample_age: AgeStat,
 }
 
 /// The result of a run.
@@ -247,7 +270,7 @@ impl AppsRun {
         );
         let _ = writeln!(
             s,
-            "{:<16} {:>6} {:>9} {:>8} {:>8} {:>9} {:>8} {:>8}",
+            "{:<16} {:>6} {:>9} {:>8} {:>8} {:>9} {:>8} {:>8} {:>11}",
             "module",
             "synced",
             "published",
@@ -255,12 +278,13 @@ impl AppsRun {
             "received",
             "tx frames",
             "hrt late",
-            "srt miss"
+            "srt miss",
+            "age max us"
         );
         for m in &self.modules {
             let _ = writeln!(
                 s,
-                "{:<16} {:>6} {:>9} {:>8} {:>8} {:>9} {:>8} {:>8}",
+                "{:<16} {:>6} {:>9} {:>8} {:>8} {:>9} {:>8} {:>8} {:>11}",
                 m.name,
                 if m.synced { "yes" } else { "no" },
                 m.published,
@@ -268,7 +292,12 @@ impl AppsRun {
                 m.received,
                 m.counters.tx_frames,
                 m.counters.hrt_late,
-                m.counters.deadline_missed
+                m.counters.deadline_missed,
+                if m.sample_age.count == 0 {
+                    "-".to_string()
+                } else {
+                    format!("{:.1}", m.sample_age.max_ns as f64 / 1e3)
+                }
             );
         }
         for h in &self.figures.hrt {
@@ -342,6 +371,7 @@ pub fn run(plan: &Plan, modules: &[AppSpec], cfg: &SimConfig) -> Result<AppsRun,
                 published,
                 publish_errors,
                 received,
+                sample_age: m.sample_age(),
             });
         }
     }

@@ -1017,6 +1017,9 @@ impl<M: Module> Bus<M> {
             g.sent();
         }
         node.can.on_wire = Some(win_mb);
+        if let Some(t) = node.can.tx_sof.get_mut(win_mb) {
+            *t = sof;
+        }
         let bits = exact_bits(&p.frame);
         let body = bits - INTERMISSION_BITS;
         let mut ok = true;

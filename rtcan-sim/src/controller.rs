@@ -75,6 +75,9 @@ pub struct SimController {
     pub(crate) abort_requested: [bool; MAILBOXES],
     /// Mailbox whose frame is on the wire.
     pub(crate) on_wire: Option<usize>,
+    /// Start of frame of each mailbox's last transmission attempt (global time; what
+    /// bxCAN's TTCM stamps into TDTR): the sample-age meter reads it at completion.
+    pub(crate) tx_sof: [Nanos; MAILBOXES],
     /// Completions produced synchronously (aborts), turned into TX interrupts by the bus.
     pub(crate) reports: Vec<(Mailbox, TxResult)>,
     pub(crate) fifos: [VecDeque<(Frame, Nanos)>; RX_FIFOS],
@@ -97,6 +100,7 @@ impl SimController {
             mailboxes: [None; MAILBOXES],
             abort_requested: [false; MAILBOXES],
             on_wire: None,
+            tx_sof: [0; MAILBOXES],
             reports: Vec::new(),
             fifos: [VecDeque::new(), VecDeque::new()],
             rx_irq_pending: [false; RX_FIFOS],
@@ -131,6 +135,16 @@ impl SimController {
     /// Frames waiting in receive FIFO `fifo`.
     pub fn fifo_len(&self, fifo: usize) -> usize {
         self.fifos.get(fifo).map_or(0, VecDeque::len)
+    }
+
+    /// Global time of the callback in progress (the module's own `now` is local).
+    pub fn global_now(&self) -> Nanos {
+        self.now
+    }
+
+    /// Start of frame of mailbox `mb`'s last transmission attempt, global time.
+    pub fn tx_sof(&self, mb: usize) -> Option<Nanos> {
+        self.tx_sof.get(mb).copied()
     }
 
     /// Pending mailbox `mb`, if loaded.

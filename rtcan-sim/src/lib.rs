@@ -41,6 +41,7 @@ pub mod rng;
 pub mod robot;
 pub mod rta;
 pub mod run;
+pub mod sample_age;
 pub mod session;
 pub mod slots;
 pub mod sync_watch;

@@ -108,6 +108,9 @@ pub struct ModuleReport {
     pub fifo_overruns: u64,
     /// Its bus guardian cut it off (global time), if it has one and did.
     pub guardian_cut_at: Option<Nanos>,
+    /// Age of its HRT samples at transmission (publish → SOF of the first frame), per
+    /// topic it sends.
+    pub sample_age: Vec<crate::sample_age::TopicAge>,
 }
 
 /// The result of a triskar2 run.
@@ -232,7 +235,13 @@ fn run_all(
     // A panicking earlier run leaves the lock poisoned; the statics are reset anyway.
     let _guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
     reset_all();
-    let result = simulate(&sc, cfg, script, params);
+    let result = simulate(
+        &sc,
+        cfg,
+        script,
+        params,
+        &crate::sample_age::tx_names(plan),
+    );
     reset_all();
     result
 }
@@ -525,6 +534,7 @@ fn simulate(
     cfg: &TriskarConfig,
     script: &services::ServiceScript,
     params: Option<crate::param::ParamBus>,
+    tx_names: &[Vec<String>],
 ) -> Result<(TriskarRun, services::ServiceLog, crate::param::ParamLog), String> {
     let shared = new_shared(cfg);
     shared.borrow_mut().services.script = script.clone();
@@ -646,6 +656,8 @@ fn simulate(
             srt.pending(n, *tx, log);
         }
         overrides += m.app().overrides().unwrap_or(0);
+        let sample_age =
+            crate::sample_age::named(m.sample_ages(), tx_names.get(n).map_or(&[][..], |v| v));
         modules.push(ModuleReport {
             name: m.name(),
             counters: m.counters(),
@@ -667,6 +679,7 @@ fn simulate(
                 .controller(n)
                 .map_or(0, |c| c.stats.rx_overrun.iter().sum()),
             guardian_cut_at: bus.guardian(n).and_then(|g| g.tripped.map(|t| t.0)),
+            sample_age,
         });
     }
     syncs.finish(end);

@@ -408,6 +408,8 @@ pub(crate) struct WithUpdate<'a> {
     pub now: Nanos,
     /// A power cut hit this module: down for this long from `now`.
     pub cut: Option<Nanos>,
+    /// HRT samples the engine took in this call (sample age at transmission).
+    pub taken: crate::sample_age::Taken,
 }
 
 impl WithUpdate<'_> {
@@ -484,7 +486,9 @@ impl WithUpdate<'_> {
 
 impl Host for WithUpdate<'_> {
     fn hrt_sample(&mut self, tx: u8) -> Option<Token> {
-        self.host.hrt_sample(tx)
+        let t = self.host.hrt_sample(tx)?;
+        self.taken.note(self.host, tx, t);
+        Some(t)
     }
     fn payload(&self, token: Token) -> &[u8] {
         self.host.payload(token)

@@ -260,3 +260,66 @@ fn module_table_shows_a_killed_module_within_3_cycles_of_its_missed_heartbeat() 
         }
     }
 }
+
+/// Synchronous HRT publishers (R2P §3.4.5, issue 14): every HRT sample a module sends
+/// is published `lead` (robot.toml, default 500 µs) before its slot on the slot clock,
+/// so at its frame's SOF it is at most `lead` + 20 µs old (the slot's SOF delay: guard,
+/// interrupt latency, a slave's grid offset). Every HRT topic on the bus is measured,
+/// each sample's first frame; the lower bound shows the sample was not published at
+/// some earlier poll (at most the 1 µs of the sim's CPU model early).
+#[test]
+fn hrt_samples_are_at_most_lead_plus_20_us_old_on_the_bus() {
+    let plan = plan();
+    let r = nominal(3.0, 1);
+    let mut seen = Vec::new();
+    for m in &r.modules {
+        for a in &m.sample_age {
+            let t = plan.topics.iter().find(|t| t.name == a.topic).unwrap();
+            let lead = t.lead_ns.unwrap();
+            let period = t.actual_period_ns(&plan.bus).unwrap();
+            eprintln!(
+                "{}/{}: {} samples, max {:.3} us, mean {:.3} us (lead {} us)",
+                m.name,
+                a.topic,
+                a.stat.count,
+                a.stat.max_ns as f64 / 1e3,
+                a.stat.mean_ns() / 1e3,
+                lead / 1000
+            );
+            assert!(a.stat.max_ns <= lead + 20_000, "{}: {:?}", a.topic, a.stat);
+            assert!(
+                a.stat.mean_ns() >= (lead - 1_000) as f64,
+                "{}: {:?}",
+                a.topic,
+                a.stat
+            );
+            // Every instance from sync on (3 s, the first ~0.1 s to synchronise).
+            let expected = 2_900_000_000 / period;
+            assert!(
+                a.stat.count >= expected,
+                "{}: {} < {expected}",
+                a.topic,
+                a.stat.count
+            );
+            seen.push(a.topic.clone());
+        }
+        assert_eq!(m.counters.hrt_empty, 0, "{}", m.name);
+    }
+    seen.sort();
+    // The HRT topics on the bus (encoder2 stays on motor2).
+    assert_eq!(
+        seen,
+        [
+            "encoder1",
+            "encoder3",
+            "odometry",
+            "proximity",
+            "wheel_setpoints"
+        ]
+    );
+    assert_eq!(
+        r.run.figures.hrt.iter().map(|h| h.misses).sum::<u64>(),
+        0,
+        "HRT misses"
+    );
+}

@@ -7,25 +7,26 @@
 //! | `slot_timer` (TIM2) | 4, highest | commit the prepared plan: TXRQ of the slot's frame, aborts |
 //! | `can_rx`, `can_tx`, `can_sce` | 3 | registers into lock-free queues; bus-off: abort all |
 //! | `protocol` (EXTI1) | 2 | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up |
-//! | `module_app` | 1 | the module's nodes |
-//! | SysTick (monotonic) | lowest | wakes the app task |
+//! | `module_app` | 1 | the module's nodes, woken at their due times by the protocol task (slot clock) |
+//! | SysTick (monotonic) | lowest | backs up the app task's wake-up |
 //!
 //! Only the slot-timer resource (`glue::Core`: TIM2, plan, TX mailboxes) is shared across
 //! priorities; its critical sections are a few dozen instructions (QEMU row
 //! `critical_section_slot`), the blocking of the slot timer.
 use heapless::spsc::Consumer;
-use rtcan_board_stm32f103::common::protocol::{DynController, Lock};
+use rtcan_board_stm32f103::common::protocol::{DynController, Lock, SlotTimerHw};
 use rtcan_board_stm32f103::common::{Protocol, RxEvent, Stamps, TxEvent};
 use rtcan_board_stm32f103::glue::Core;
 use rtcan_board_stm32f103::hal::gpio::Floating;
 use rtcan_board_stm32f103::hal::pac::{Interrupt, NVIC};
+use rtcan_board_stm32f103::slot_timer::SlotTimer;
 use rtcan_core::engine::Engine;
 use rtcan_core::id::CanId;
 use rtcan_core::time::Nanos;
-use rtcan_pubsub::ModuleHost;
+use rtcan_pubsub::{ModuleHost, SlotGrid};
 
 use crate::cycles;
-use crate::run::DELIVERED;
+use crate::run::{take_due, DELIVERED};
 
 /// Interrupt of the protocol task (unused by the F103's peripherals in these images).
 pub const PROTOCOL_INTERRUPT: Interrupt = Interrupt::EXTI1;
@@ -64,6 +65,12 @@ pub struct Driver<const RX: usize, const ARENA: usize, const Q: usize> {
     engine: Engine<'static, RX, ARENA, Q>,
     host: ModuleHost<'static>,
     proto: Protocol,
+    /// How early the protocol prepares a wake-up (half a slot).
+    lead_ns: Nanos,
+    /// Local time from which the slot grid in the module's status is refreshed (once a
+    /// cycle, and at once when synchronisation is gained or lost).
+    grid_until: Nanos,
+    grid_synced: bool,
 }
 
 impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
@@ -81,6 +88,9 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
             engine,
             host,
             proto: Protocol::new(bit_ns, DRIFT_PPM, slot_ns / 2).with_stamps(stamps),
+            lead_ns: slot_ns / 2,
+            grid_until: 0,
+            grid_synced: false,
         }
     }
 
@@ -122,8 +132,53 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
             h.pump(e, now, &mut DynController(c));
         });
         cycles::TASK_PREPARE_SLOT.since(t);
-        if self.engine.counters().rx_delivered != delivered {
+        let now = slot.lock(|c| c.timer.now());
+        self.refresh_grid(now);
+        let app_due = take_due(now);
+        if app_due.is_ok() || self.engine.counters().rx_delivered != delivered {
             DELIVERED.notify();
+        }
+        if let Err(due) = app_due {
+            self.alarm(due, slot);
+        }
+    }
+
+    /// The slot grid into the module's status (where synchronous HRT publishers read
+    /// their due times), once a cycle: the clock's rate moves it by ns per cycle.
+    fn refresh_grid(&mut self, now: Nanos) {
+        let synced = self.engine.is_synced();
+        if synced == self.grid_synced && now < self.grid_until {
+            return;
+        }
+        let grid = if synced {
+            SlotGrid::of_clock(self.engine.clock(), now)
+        } else {
+            None
+        };
+        self.grid_synced = synced;
+        self.grid_until = grid.map_or(Nanos::MAX, |g| {
+            g.start.saturating_add(g.cycle_local.saturating_mul(3) / 2)
+        });
+        if !synced {
+            // Not synchronised: nothing to refresh until that changes.
+            self.grid_until = Nanos::MAX;
+        }
+        self.host.status().set_grid(grid);
+    }
+
+    /// Wakes the protocol task (and so the app) at the app's due time `due` when that
+    /// comes before the protocol's own next run (the prepare alarm, half a slot before
+    /// the engine's next wake-up): the prepare alarm is re-armed earlier; the protocol
+    /// arms its own again when that run finds nothing to prepare.
+    fn alarm(&mut self, due: Nanos, slot: &mut impl Lock<SlotCore>) {
+        if due == Nanos::MAX {
+            return;
+        }
+        let next_run = self.engine.next_wakeup().saturating_sub(self.lead_ns);
+        if due < next_run {
+            // Outside the critical section: it may divide.
+            let ticks = SlotTimer::ticks_of(due);
+            slot.lock(|c| c.timer.arm_prepare(ticks));
         }
     }
 }

@@ -23,9 +23,10 @@ use defmt_rtt as _;
 // formatted message without it.
 use panic_probe as _;
 
-// SysTick monotonic at 1 kHz: wakes the app task at its due times. Time stamps and
-// the app's clock come from the slot timer instead (125 ns ticks, the clock the
-// engine and SOF stamps use).
+// SysTick monotonic at 1 kHz: backs up the app task's wake-ups (the protocol task
+// wakes it at its due times through the slot timer's prepare alarm, `run::DUE`) and
+// stamps defmt lines. Time stamps and the app's clock come from the slot timer
+// (125 ns ticks, the clock the engine and SOF stamps use).
 rtic_monotonics::systick_monotonic!(Mono, 1_000);
 
 /// SYSCLK, Hz (the clock tree of `rtcan_board_stm32f103`).

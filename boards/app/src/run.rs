@@ -26,8 +26,31 @@ pub struct Notify {
     waker: Mutex<Cell<Option<Waker>>>,
 }
 
-/// Raised when the engine delivered a received message to the module's topics.
+/// Raised when the engine delivered a received message to the module's topics, and
+/// when the app's due time (`DUE`) came on the slot clock.
 pub static DELIVERED: Notify = Notify::new();
+
+/// The app's next due time on the slot timer's clock (`Nanos::MAX`: none), written by
+/// the app task before it sleeps and read by the protocol task, which wakes it there
+/// through the slot timer's prepare alarm (125 ns ticks) rather than the 1 ms SysTick:
+/// a synchronous HRT publisher (R2P §3.4.5) runs its lead time before its slot, not up
+/// to 2 ms after (docs/EMULATOR.md "Findings", proximity's misses).
+pub static DUE: Mutex<Cell<Nanos>> = Mutex::new(Cell::new(Nanos::MAX));
+
+/// The app's due time if it has come at `now` (then cleared: one wake per due time),
+/// else `Err(due)` (`Nanos::MAX`: none).
+pub fn take_due(now: Nanos) -> Result<Nanos, Nanos> {
+    critical_section::with(|cs| {
+        let d = DUE.borrow(cs);
+        let due = d.get();
+        if due <= now {
+            d.set(Nanos::MAX);
+            Ok(due)
+        } else {
+            Err(due)
+        }
+    })
+}
 
 impl Notify {
     /// Lowered, nobody waiting.
@@ -80,7 +103,11 @@ pub fn sleep_ticks(now: Nanos, due: Nanos) -> u32 {
 }
 
 /// Sleeps until the app's next due time, or less if a message is delivered meanwhile.
+/// The protocol task wakes it at `due` on the slot clock; the SysTick timeout (at most
+/// 2 ms later) only backs that up.
 pub async fn sleep_until(now: Nanos, due: Nanos) {
+    critical_section::with(|cs| DUE.borrow(cs).set(due));
+    crate::driver::pend_protocol();
     let at = Mono::now() + sleep_ticks(now, due).millis();
     // A timeout is the normal end: the app is due.
     let _ = Mono::timeout_at(at, DELIVERED.wait()).await;

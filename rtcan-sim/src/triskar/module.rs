@@ -208,6 +208,8 @@ pub trait Inspect {
     fn set_dies_at(&mut self, at: Option<Nanos>);
     /// Still executing at global time `g`.
     fn alive_at(&self, g: Nanos) -> bool;
+    /// Age of its HRT samples at transmission, per engine tx index.
+    fn sample_ages(&self) -> &[crate::sample_age::AgeStat];
 }
 
 /// An SRT topic whose publications are followed: tx index, how to read the topic's
@@ -315,6 +317,10 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     exits: u32,
     first_trip_at: Option<Nanos>,
     last_exit_at: Option<Nanos>,
+    /// Sample age at transmission of its HRT topics.
+    ages: crate::sample_age::AgeMeter,
+    /// HRT samples the engine took in the last engine call.
+    taken: crate::sample_age::Taken,
 }
 
 impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
@@ -356,6 +362,8 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             exits: 0,
             first_trip_at: None,
             last_exit_at: None,
+            ages: crate::sample_age::AgeMeter::default(),
+            taken: crate::sample_age::Taken::default(),
         }
     }
 
@@ -450,9 +458,11 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             module: self.index,
             now: g,
             cut: None,
+            taken: crate::sample_age::Taken::default(),
         };
         let r = f(&mut self.engine, can, &mut h);
         let cut = h.cut;
+        self.taken = h.taken;
         drop(sh);
         if let Some(d) = cut {
             // Down from now: the next event finds the power off (`alive`).
@@ -477,6 +487,14 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             return wake;
         }
         let global = self.clock.global_at(now);
+        // The slot grid the image's protocol task hands its app (synchronous HRT
+        // publishers run `lead` before their slots on it).
+        let grid = if self.engine.is_synced() {
+            rtcan::pubsub::SlotGrid::of_clock(self.engine.clock(), now)
+        } else {
+            None
+        };
+        self.status.set_grid(grid);
         let motor = self.motor_index();
         let (app_next, svc_next) = {
             let mut shared = self.shared.borrow_mut();
@@ -514,7 +532,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
             self.first_trip_at.get_or_insert(global);
         }
         self.host.pump(&mut self.engine, now, can);
+        let before = crate::sample_age::AgeMeter::loaded(can);
         let e = self.engine_call(now, can, |e, can, h| e.poll(now, can, h));
+        self.ages.after_poll(before, &self.taken, can);
         // A slot handler may have freed queue room.
         self.host.pump(&mut self.engine, now, can);
         Some(if e == Nanos::MAX {
@@ -565,6 +585,8 @@ impl<const RX: usize, const AR: usize, const Q: usize> Module for SimModule<RX, 
         if let Err(wake) = self.alive(now, can) {
             return wake;
         }
+        let ok = matches!(result, TxResult::Sent);
+        self.ages.on_tx_done(usize::from(mailbox.0), ok, now, can);
         self.engine_call(now, can, |e, can, h| {
             e.on_tx_done(mailbox, result, now, can, h)
         });
@@ -640,6 +662,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     fn set_dies_at(&mut self, at: Option<Nanos>) {
         self.down = at.map(|a| vec![(a, Nanos::MAX)]).unwrap_or_default();
         self.next_down = 0;
+    }
+    fn sample_ages(&self) -> &[crate::sample_age::AgeStat] {
+        &self.ages.by_tx
     }
     fn alive_at(&self, g: Nanos) -> bool {
         !self.down.iter().any(|&(from, to)| g >= from && g < to)

@@ -141,6 +141,28 @@ pub fn triskar_text(r: &TriskarRun) -> String {
             m.motor.map_or("-".into(), |(w, _)| format!("{w:.3}"))
         );
     }
+    let ages: Vec<String> = r
+        .modules
+        .iter()
+        .flat_map(|m| {
+            m.sample_age.iter().map(move |a| {
+                format!(
+                    "{}/{} max {:.1} mean {:.1}",
+                    m.name,
+                    a.topic,
+                    a.stat.max_ns as f64 / 1e3,
+                    a.stat.mean_ns() / 1e3
+                )
+            })
+        })
+        .collect();
+    if !ages.is_empty() {
+        let _ = writeln!(
+            o,
+            "HRT sample age at transmission (publish -> SOF), us: {}",
+            ages.join("; ")
+        );
+    }
     o
 }
 
@@ -194,6 +216,12 @@ pub fn triskar_value(r: &TriskarRun, speed_x: f64) -> serde_json::Value {
                         + k.rx_bad_sync + k.rx_bad_heartbeat,
                 },
                 "wheel_rad_s": m.motor.map_or(serde_json::Value::Null, |(w, _)| num(f64::from(w))),
+                "sample_age": m.sample_age.iter().map(|a| json!({
+                    "topic": a.topic,
+                    "count": a.stat.count,
+                    "max_ns": a.stat.max_ns,
+                    "mean_ns": num(a.stat.mean_ns()),
+                })).collect::<Vec<_>>(),
             })
         })
         .collect();

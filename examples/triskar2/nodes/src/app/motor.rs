@@ -1,10 +1,10 @@
 //! The three motor modules: a 200 Hz wheel-speed controller each (`motor_ctrl1..3`),
 //! plus inverse kinematics on motor1 (100 Hz) and odometry on motor2 (50 Hz).
-use rtcan::pubsub::{Node, Publisher, Subscriber, SystemStatus};
+use rtcan::pubsub::{HrtSlots, Node, Publisher, SlotEvery, Subscriber, SystemStatus};
 use rtcan::robot_toml as msg;
 use rtcan::robot_toml::{motor1, motor2, motor3};
 
-use super::{run_node, twist_from_msg, AppStats, Every, MS};
+use super::{run_node, twist_from_msg, AppStats, MS};
 use crate::encoder::EncoderSpeed;
 use crate::kinematics::{InverseKinematicsNode, KinematicsConfig, TRISKAR2};
 use crate::motor::{MotorConfig, MotorNode, MotorOutput, MotorState};
@@ -30,20 +30,21 @@ pub struct MotorCtrl {
     motor: MotorNode,
     encoder: EncoderSpeed,
     speed_rad_s: f32,
-    every: Every,
+    every: SlotEvery,
     last: Option<MotorOutput>,
     pub stats: AppStats,
 }
 
 impl MotorCtrl {
-    /// Controller of wheel `index` (0..3), 200 Hz.
-    pub const fn new(index: usize) -> Self {
+    /// Controller of wheel `index` (0..3), 200 Hz: `lead` before each slot of its
+    /// encoder topic (`slots`, R2P §3.4.5) once synchronised, every 5 ms before.
+    pub const fn new(index: usize, slots: Option<HrtSlots>) -> Self {
         Self {
             index,
             motor: MotorNode::new(MotorConfig::TRISKAR2),
             encoder: EncoderSpeed::new(COUNTS_PER_WHEEL_REV),
             speed_rad_s: 0.0,
-            every: Every::new(5 * MS),
+            every: SlotEvery::new(slots, 5 * MS),
             last: None,
             stats: AppStats {
                 published: 0,
@@ -114,7 +115,7 @@ impl MotorCtrl {
 pub struct Motor1App {
     pub ctrl: MotorCtrl,
     ik: InverseKinematicsNode,
-    ik_every: Every,
+    ik_every: SlotEvery,
     pub stats: AppStats,
 }
 
@@ -127,9 +128,9 @@ impl Default for Motor1App {
 impl Motor1App {
     pub const fn new() -> Self {
         Self {
-            ctrl: MotorCtrl::new(0),
+            ctrl: MotorCtrl::new(0, motor1::nodes::motor_ctrl1::ENCODER1_SLOTS),
             ik: InverseKinematicsNode::new(KinematicsConfig::TRISKAR2),
-            ik_every: Every::new(10 * MS),
+            ik_every: SlotEvery::new(motor1::nodes::kinematics::WHEEL_SETPOINTS_SLOTS, 10 * MS),
             stats: AppStats {
                 published: 0,
                 publish_errors: 0,
@@ -157,10 +158,11 @@ impl Motor1App {
     pub fn poll(&mut self, now: Nanos, hw: &mut impl MotorHw) -> Nanos {
         // Kinematics first: a fresh setpoint reaches the local controller in the same
         // poll (the same priority order as the firmware's tasks).
-        if self.ik_every.due(now) {
+        let grid = motor1::STATUS.grid();
+        if self.ik_every.due(now, grid) {
             self.kinematics_step(now);
         }
-        if self.ctrl.every.due(now) {
+        if self.ctrl.every.due(now, grid) {
             use motor1::nodes::motor_ctrl1 as m;
             self.ctrl.step(
                 now,
@@ -180,7 +182,7 @@ impl Motor1App {
 pub struct Motor2App {
     pub ctrl: MotorCtrl,
     odometry: OdometryNode,
-    odo_every: Every,
+    odo_every: SlotEvery,
     wheels: [f32; 3],
     pub stats: AppStats,
 }
@@ -194,9 +196,9 @@ impl Default for Motor2App {
 impl Motor2App {
     pub const fn new() -> Self {
         Self {
-            ctrl: MotorCtrl::new(1),
+            ctrl: MotorCtrl::new(1, motor2::nodes::motor_ctrl2::ENCODER2_SLOTS),
             odometry: OdometryNode::new(TRISKAR2, 20 * MS),
-            odo_every: Every::new(20 * MS),
+            odo_every: SlotEvery::new(motor2::nodes::odometry::ODOMETRY_SLOTS, 20 * MS),
             wheels: [0.0; 3],
             stats: AppStats {
                 published: 0,
@@ -244,7 +246,8 @@ impl Motor2App {
 
     /// Runs what is due; returns the next local time to run at.
     pub fn poll(&mut self, now: Nanos, hw: &mut impl MotorHw) -> Nanos {
-        if self.ctrl.every.due(now) {
+        let grid = motor2::STATUS.grid();
+        if self.ctrl.every.due(now, grid) {
             use motor2::nodes::motor_ctrl2 as m;
             self.ctrl.step(
                 now,
@@ -255,7 +258,7 @@ impl Motor2App {
                 &motor2::STATUS,
             );
         }
-        if self.odo_every.due(now) {
+        if self.odo_every.due(now, grid) {
             self.odometry_step(now);
         }
         self.odo_every.next().min(self.ctrl.every.next())
@@ -281,13 +284,13 @@ impl Default for Motor3App {
 impl Motor3App {
     pub const fn new() -> Self {
         Self {
-            ctrl: MotorCtrl::new(2),
+            ctrl: MotorCtrl::new(2, motor3::nodes::motor_ctrl3::ENCODER3_SLOTS),
         }
     }
 
     /// Runs what is due; returns the next local time to run at.
     pub fn poll(&mut self, now: Nanos, hw: &mut impl MotorHw) -> Nanos {
-        if self.ctrl.every.due(now) {
+        if self.ctrl.every.due(now, motor3::STATUS.grid()) {
             use motor3::nodes::motor_ctrl3 as m;
             self.ctrl.step(
                 now,

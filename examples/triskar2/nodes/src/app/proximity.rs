@@ -4,11 +4,12 @@
 use rtcan::robot_toml as msg;
 use rtcan::robot_toml::proximity as module;
 
-use super::{run_node, twist_from_msg, twist_to_msg, AppStats, Every, MS};
+use super::{run_node, twist_from_msg, twist_to_msg, AppStats, MS};
 use crate::kinematics::Twist;
 use crate::obstacle::{AvoidanceConfig, ObstacleAvoidance};
 use crate::proximity::{mm_to_m, ProximityConfig, ProximityNode, SENSOR_COUNT};
 use crate::Nanos;
+use rtcan::pubsub::SlotEvery;
 
 /// The proximity module's hardware: four IR rangers (front, left, back, right).
 pub trait ProximityHw {
@@ -24,7 +25,7 @@ pub const TELEOP_TIMEOUT_NS: Nanos = 250 * MS;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProximityApp {
     ranger: ProximityNode,
-    ranger_every: Every,
+    ranger_every: SlotEvery,
     avoidance: ObstacleAvoidance,
     teleop: Option<(Nanos, Twist)>,
     ranges_m: [f32; SENSOR_COUNT],
@@ -47,7 +48,8 @@ impl ProximityApp {
     pub const fn new() -> Self {
         Self {
             ranger: ProximityNode::new(ProximityConfig::TRISKAR2),
-            ranger_every: Every::new(40 * MS),
+            // `lead` before each `proximity` slot once synchronised (R2P §3.4.5).
+            ranger_every: SlotEvery::new(module::nodes::ir_ranger::PROXIMITY_SLOTS, 40 * MS),
             avoidance: ObstacleAvoidance::new(AvoidanceConfig::TRISKAR2),
             teleop: None,
             ranges_m: [ProximityConfig::TRISKAR2.max_range_m; SENSOR_COUNT],
@@ -115,7 +117,7 @@ impl ProximityApp {
     /// Runs what is due and drains the subscriptions; returns the next local time to
     /// run at (call it also whenever a frame was received).
     pub fn poll(&mut self, now: Nanos, hw: &mut impl ProximityHw) -> Nanos {
-        if self.ranger_every.due(now) {
+        if self.ranger_every.due(now, module::STATUS.grid()) {
             self.ranger_step(now, hw);
         }
         self.avoid_step(now);
