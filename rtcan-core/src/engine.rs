@@ -449,12 +449,20 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
 
     /// Takeover deadline: `takeover_cycles(rank)` cycles after `from` (the last sync heard,
     /// or start-up); never for a plain slave.
+    // Inline: every sync on a slave runs it (issue 10's sync budget), and a plain slave's
+    // deadline is one store; the backup's product is out of line (`takeover_deadline`).
+    #[inline(always)]
     fn arm_takeover(&mut self, from: Nanos) {
         self.silent_since = from;
         self.promote_at = match self.arbiter.takeover_after() {
-            Some(n) => from.saturating_add(u64::from(n).saturating_mul(self.tables.bus.cycle_ns())),
+            Some(n) => self.takeover_deadline(from, n),
             None => Nanos::MAX,
         };
+    }
+
+    #[inline(never)]
+    fn takeover_deadline(&self, from: Nanos, cycles: u32) -> Nanos {
+        from.saturating_add(u64::from(cycles).saturating_mul(self.tables.bus.cycle_ns()))
     }
 
     /// This module's view of the bus is stale (it could not act for a whole cycle, or it

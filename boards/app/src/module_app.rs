@@ -134,7 +134,9 @@ mod app {
     #[task(binds = USB_LP_CAN_RX0, shared = [slot], local = [can_rx, rx_events], priority = 3)]
     fn can_rx(mut cx: can_rx::Context) {
         let t = fw::cycles::now();
-        let now = cx.shared.slot.lock(|c| c.timer.now());
+        // Only the counter under the lock (it blocks the slot timer); ns outside.
+        let ticks = cx.shared.slot.lock(|c| c.timer.ticks());
+        let now = rtcan_board_stm32f103::slot_timer::SlotTimer::ns_of(ticks);
         cx.local.can_rx.on_interrupt(now, cx.local.rx_events);
         pend_protocol();
         fw::cycles::ISR_CAN_RX.since(t);
@@ -189,7 +191,8 @@ mod app {
         let mut last_report = 0;
         loop {
             cx.local.watchdog.feed();
-            let now = cx.shared.slot.lock(|c| c.timer.now());
+            let ticks = cx.shared.slot.lock(|c| c.timer.ticks());
+            let now = rtcan_board_stm32f103::slot_timer::SlotTimer::ns_of(ticks);
             fw::cycles::report(now, &mut last_report);
             let due = app.poll(now, cx.local.hw);
             // What the app published for SRT/NRT waits in its topics: hand it over.

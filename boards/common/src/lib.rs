@@ -27,7 +27,9 @@ pub mod wide_clock;
 
 pub use bit_timing::{BitTiming, BitTimingError};
 pub use filters::FilterSet;
-pub use protocol::{Direct, Lock, Protocol, RxEvent, SlotCore, SlotTimerHw, Stamps, TxEvent};
+pub use protocol::{
+    Alarm, AlarmSetting, Direct, Lock, Protocol, RxEvent, SlotCore, SlotTimerHw, Stamps, TxEvent,
+};
 pub use slot_plan::SlotPlan;
 pub use sof::SofClock;
 pub use tx_image::{TxImage, TxPort};

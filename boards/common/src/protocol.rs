@@ -12,19 +12,25 @@
 //! The engine never runs in the slot-timer interrupt: the protocol task calls
 //! `Engine::poll(at)` for the next wake-up `at` up to `lead_ns` early, through a
 //! controller (`Gate`) that stages every load and abort into the armed plan instead of
-//! touching the hardware, then arms the compare at `at`. The slot clock is the local
-//! clock model: a boundary never waits for the sync frame's processing, which corrects
-//! the model for the later slots. Until the plan is committed the engine already stands at
-//! `at`, so whatever it loads meanwhile (a refill after a completion) is staged too and
-//! never starts before `at`.
+//! touching the hardware, then publishes the plan with the compare at `at`. The slot
+//! clock is the local clock model: a boundary never waits for the sync frame's
+//! processing, which corrects the model for the later slots. Until the plan is committed
+//! the engine already stands at `at`, so whatever it loads meanwhile (a refill after a
+//! completion) is staged too and never starts before `at`.
 //!
 //! The slot-timer side (`SlotCore`: timer, plan, TX port) is one resource shared with the
 //! slower contexts through short critical sections (`Lock`; RTIC priority ceilings): each
-//! stages or writes one mailbox or reads the clock, so the blocking of the slot timer is
-//! the longest of them, measured by the QEMU row `slot_boundary_to_txrq`.
+//! stages or writes one mailbox, reads the clock's registers, or publishes the plan with
+//! the compare's register writes; every computation (frame images, the compare value,
+//! nanoseconds from ticks) happens outside them. The blocking of the slot timer is the
+//! longest of them, the QEMU row `critical_section_slot`, a term of
+//! `slot_boundary_to_txrq`. Nothing in them waits for the clock: an alarm whose time
+//! passed while it was armed is raised in software afterwards (`SlotTimerHw::rescue`),
+//! and the interrupt, not the protocol task, applies the plan.
 use crate::slot_plan::{SlotPlan, StagedAbort};
 use crate::sof::{valid_bits_min, SofClock};
 use crate::tx_image::{TxImage, TxPort};
+use crate::wide_clock::{Arm, WideClock};
 use core::marker::PhantomData;
 use rtcan_core::confinement::ErrorState;
 use rtcan_core::driver::{Controller, Host, Mailbox, TxResult};
@@ -46,19 +52,76 @@ impl Controller for DynController<'_> {
     }
 }
 
-/// The local clock and the two alarms of the slot timer.
+/// The two alarms of the slot timer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Alarm {
+    /// The commit compare: the slot-timer interrupt applies the published plan.
+    Commit,
+    /// The prepare alarm: the slot-timer interrupt only pends the protocol task.
+    Prepare,
+}
+
+/// How to set an alarm, decided from a clock reading outside the critical section that
+/// applies it (`SlotTimerHw::arm`), for a 16-bit compare extended by `WideClock`: the
+/// 64-bit comparisons happen here, the section only writes registers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlarmSetting {
+    /// No alarm (interrupt off).
+    Off,
+    /// The target is due already: raise the compare event in software.
+    Due,
+    /// Compare register value of the target tick `at_ticks`.
+    Compare {
+        /// Compare register value.
+        value: u16,
+        /// Target tick.
+        at_ticks: u64,
+    },
+    /// Beyond the compare's range: re-evaluated at the half-period events.
+    Later {
+        /// Target tick.
+        at_ticks: u64,
+    },
+}
+
+impl AlarmSetting {
+    /// The setting for target tick `at_ticks` (`u64::MAX`: none) when the clock read
+    /// `now_ticks`. If the clock passes the target before the compare is written, the
+    /// match is lost: the caller reads the clock after arming and calls `rescue`.
+    pub const fn new(at_ticks: u64, now_ticks: u64) -> Self {
+        if at_ticks == u64::MAX {
+            return AlarmSetting::Off;
+        }
+        match WideClock::arm(at_ticks, now_ticks) {
+            Arm::Due => AlarmSetting::Due,
+            Arm::Compare(value) => AlarmSetting::Compare { value, at_ticks },
+            Arm::Later => AlarmSetting::Later { at_ticks },
+        }
+    }
+}
+
+/// The local clock and the two alarms of the slot timer. What runs in the protocol
+/// task's critical sections (`ticks`, `arm`, `rescue`) reads or writes registers;
+/// conversions and 64-bit comparisons happen outside (`ns_of`, `ticks_of`,
+/// `AlarmSetting::new`).
 pub trait SlotTimerHw {
+    /// Local time in timer ticks: the counter and its software extension, no conversion.
+    fn ticks(&self) -> u64;
+    /// Local time of tick `ticks`, ns.
+    fn ns_of(ticks: u64) -> Nanos;
     /// Local time, ns.
-    fn now(&self) -> Nanos;
-    /// Timer ticks of local time `at`, rounded up. Called outside critical sections (it
-    /// may divide, a library call on the Cortex-M3).
+    fn now(&self) -> Nanos {
+        Self::ns_of(self.ticks())
+    }
+    /// Timer ticks of local time `at`, rounded up (it may divide, a library call on the
+    /// Cortex-M3).
     fn ticks_of(at: Nanos) -> u64;
-    /// Arms the commit compare at tick `at_ticks`; false if it has already passed (the
-    /// caller commits at once).
-    fn arm_commit(&mut self, at_ticks: u64) -> bool;
-    /// Arms the prepare alarm at tick `at_ticks`: the slot-timer interrupt then only
-    /// pends the protocol task. `u64::MAX`: none.
-    fn arm_prepare(&mut self, at_ticks: u64);
+    /// Applies `setting` to `alarm`: register writes only.
+    fn arm(&mut self, alarm: Alarm, setting: AlarmSetting);
+    /// The clock read `at_ticks` or later after `arm(alarm, at_ticks, _)`: if the alarm is
+    /// still armed and has not fired, its match was lost; raise it (the interrupt runs as
+    /// if it matched).
+    fn rescue(&mut self, alarm: Alarm);
 }
 
 /// The resource of the slot-timer interrupt.
@@ -72,8 +135,9 @@ pub struct SlotCore<T, P> {
 }
 
 impl<T: SlotTimerHw, P: TxPort> SlotCore<T, P> {
-    /// The commit compare matched: apply the plan. True if anything was armed (then pend
-    /// the protocol task, which prepares the next wake-up).
+    /// The commit compare matched: apply the published plan. True if one was (then pend
+    /// the protocol task, which prepares the next wake-up). Inline: the interrupt's path.
+    #[inline(always)]
     pub fn on_commit(&mut self) -> bool {
         self.plan.commit(&mut self.tx)
     }
@@ -182,6 +246,13 @@ pub struct Protocol {
     stamps: Stamps,
     bit_ns: Nanos,
     lead_ns: Nanos,
+    g: GateState,
+}
+
+/// What the engine's controller (`Gate`) reads and updates besides the slot-timer
+/// resource, in one struct: a `Gate` is then two pointers, built in a few instructions
+/// on every receive, completion and prepare (issue 10: the sync path's budget).
+struct GateState {
     /// Mailboxes to report `Aborted` to the engine (staged loads cancelled or held back).
     synthetic: u8,
     /// Mailboxes whose load is held back (muted), in the engine's view loaded.
@@ -195,10 +266,7 @@ pub struct Protocol {
 struct Gate<'a, L, T, P> {
     slot: &'a mut L,
     _core: PhantomData<fn() -> (T, P)>,
-    synthetic: &'a mut u8,
-    parked: &'a mut u8,
-    mute: Mute,
-    stats: &'a mut ProtocolStats,
+    g: &'a mut GateState,
 }
 
 impl<L, T, P> Controller for Gate<'_, L, T, P>
@@ -214,9 +282,9 @@ where
         if m >= rtcan_core::driver::MAILBOXES {
             return;
         }
-        if self.mute != Mute::Off {
-            *self.parked |= 1 << m;
-            self.stats.muted_loads = self.stats.muted_loads.saturating_add(1);
+        if self.g.mute != Mute::Off {
+            self.g.parked |= 1 << m;
+            self.g.stats.muted_loads = self.g.stats.muted_loads.saturating_add(1);
             return;
         }
         // The image is computed outside the critical section.
@@ -235,15 +303,15 @@ where
             return;
         }
         let bit = 1u8 << m;
-        if *self.parked & bit != 0 {
-            *self.parked &= !bit;
-            *self.synthetic |= bit;
+        if self.g.parked & bit != 0 {
+            self.g.parked &= !bit;
+            self.g.synthetic |= bit;
             return;
         }
         // Bus-off: every mailbox was aborted at once (`on_bus_off`) and the plan dropped;
         // the engine's aborts, one per mailbox it had loaded, are done already and their
         // completions come from the hardware. Writing them again would abort one by one.
-        let bus_off = self.mute == Mute::UntilRecovery;
+        let bus_off = self.g.mute == Mute::UntilRecovery;
         let cancelled = self.slot.lock(|c| match c.plan.stage_abort(m) {
             StagedAbort::Cancelled => true,
             StagedAbort::Deferred => false,
@@ -255,7 +323,7 @@ where
             }
         });
         if cancelled {
-            *self.synthetic |= bit;
+            self.g.synthetic |= bit;
         }
     }
 }
@@ -270,14 +338,16 @@ impl Protocol {
             stamps: Stamps::Ttcm,
             bit_ns: bit_ns as Nanos,
             lead_ns,
-            synthetic: 0,
-            parked: 0,
-            mute: Mute::Off,
-            stats: ProtocolStats {
-                rx_foreign: 0,
-                late_prepares: 0,
-                muted_loads: 0,
-                bus_off: 0,
+            g: GateState {
+                synthetic: 0,
+                parked: 0,
+                mute: Mute::Off,
+                stats: ProtocolStats {
+                    rx_foreign: 0,
+                    late_prepares: 0,
+                    muted_loads: 0,
+                    bus_off: 0,
+                },
             },
         }
     }
@@ -290,7 +360,7 @@ impl Protocol {
 
     /// Counters.
     pub const fn stats(&self) -> &ProtocolStats {
-        &self.stats
+        &self.g.stats
     }
 
     /// The SOF clock (TTCM offset estimate).
@@ -300,17 +370,14 @@ impl Protocol {
 
     /// True while transmissions are held back after a bus-off.
     pub fn is_muted(&self) -> bool {
-        self.mute != Mute::Off
+        self.g.mute != Mute::Off
     }
 
     fn gate<'a, L, T, P>(&'a mut self, slot: &'a mut L) -> Gate<'a, L, T, P> {
         Gate {
             slot,
             _core: PhantomData,
-            synthetic: &mut self.synthetic,
-            parked: &mut self.parked,
-            mute: self.mute,
-            stats: &mut self.stats,
+            g: &mut self.g,
         }
     }
 
@@ -334,7 +401,7 @@ impl Protocol {
         }
         let (regs, now) = (event.regs, event.now);
         let Some(frame) = regs.frame() else {
-            self.stats.rx_foreign = self.stats.rx_foreign.saturating_add(1);
+            self.g.stats.rx_foreign = self.g.stats.rx_foreign.saturating_add(1);
             return;
         };
         let sof = match self.stamps {
@@ -349,9 +416,9 @@ impl Protocol {
         };
         let mut gate = self.gate(slot);
         engine.on_rx(&frame, sof, &mut gate, host);
-        if frame.id().is_sync() && self.mute == Mute::UntilSync && engine.is_synced() {
+        if frame.id().is_sync() && self.g.mute == Mute::UntilSync && engine.is_synced() {
             // Re-synchronised after a bus-off: transmit again from the next wake-up.
-            self.mute = Mute::Off;
+            self.g.mute = Mute::Off;
             self.release_parked(slot);
         }
     }
@@ -370,7 +437,7 @@ impl Protocol {
         P: TxPort,
         H: Host,
     {
-        let now = slot.lock(|c| c.timer.now());
+        let now = T::ns_of(slot.lock(|c| c.timer.ticks()));
         let mut gate = self.gate(slot);
         engine.on_tx_done(mailbox, result, now, &mut gate, host);
     }
@@ -420,12 +487,12 @@ impl Protocol {
             c.tx.abort(0b111);
             cancelled
         });
-        self.synthetic |= cancelled;
-        self.mute = Mute::UntilRecovery;
-        self.stats.bus_off = self.stats.bus_off.saturating_add(1);
+        self.g.synthetic |= cancelled;
+        self.g.mute = Mute::UntilRecovery;
+        self.g.stats.bus_off = self.g.stats.bus_off.saturating_add(1);
         // The engine counts it, steps down if it was the master and stays silent until
         // it re-synchronised (docs/PROTOCOL.md §5.7). bxCAN's TEC saturates at bus-off.
-        let now = slot.lock(|c| c.timer.now());
+        let now = T::ns_of(slot.lock(|c| c.timer.ticks()));
         let off = ErrorState {
             tec: 255,
             rec: 0,
@@ -443,8 +510,8 @@ impl Protocol {
         P: TxPort,
     {
         // Held-back frames were placed for slots that are over: never send them late.
-        self.synthetic |= self.parked;
-        self.parked = 0;
+        self.g.synthetic |= self.g.parked;
+        self.g.parked = 0;
         slot.lock(|c| c.plan.unblock());
     }
 
@@ -463,22 +530,22 @@ impl Protocol {
         P: TxPort,
         H: Host,
     {
-        if self.mute == Mute::Off && slot.lock(|c| c.plan.is_blocked()) {
+        if self.g.mute == Mute::Off && slot.lock(|c| c.plan.is_blocked()) {
             // The status-change interrupt blocked the plan but its event was lost (queue
             // full): handle the bus-off now.
             self.on_bus_off(engine, host, slot);
         }
-        if self.mute == Mute::UntilRecovery && !slot.lock(|c| c.tx.is_bus_off()) {
+        if self.g.mute == Mute::UntilRecovery && !slot.lock(|c| c.tx.is_bus_off()) {
             // Recovered (128 × 11 recessive bits): the engine listens again from now.
-            let now = slot.lock(|c| c.timer.now());
+            let now = T::ns_of(slot.lock(|c| c.timer.ticks()));
             engine.on_error_state(now, ErrorState::default(), &mut self.gate(slot), host);
             // A master steps down at bus-off and listens first (PROTOCOL §5.6, §5.7):
             // like a slave, it transmits again after a sync, its own after a takeover.
-            self.mute = Mute::UntilSync;
+            self.g.mute = Mute::UntilSync;
         }
         self.unmute_on_takeover(engine, slot);
         self.report_synthetic(engine, host, slot);
-        let now = slot.lock(|c| c.timer.now());
+        let now = T::ns_of(slot.lock(|c| c.timer.ticks()));
         pump(engine, host, now, &mut self.gate(slot));
         self.report_synthetic(engine, host, slot);
         self.prepare(engine, host, slot);
@@ -495,8 +562,8 @@ impl Protocol {
         T: SlotTimerHw,
         P: TxPort,
     {
-        if self.mute == Mute::UntilSync && engine.is_master() {
-            self.mute = Mute::Off;
+        if self.g.mute == Mute::UntilSync && engine.is_master() {
+            self.g.mute = Mute::Off;
             self.release_parked(slot);
         }
     }
@@ -514,7 +581,7 @@ impl Protocol {
     {
         // One pass over the mask: a report may refill (and so park or stage again), which
         // is reported on the next run, so this cannot loop.
-        let mask = core::mem::replace(&mut self.synthetic, 0);
+        let mask = core::mem::replace(&mut self.g.synthetic, 0);
         for m in 0..rtcan_core::driver::MAILBOXES as u8 {
             if mask & (1 << m) != 0 {
                 self.on_tx_done(Mailbox(m), TxResult::Aborted, engine, host, slot);
@@ -522,7 +589,9 @@ impl Protocol {
         }
     }
 
-    /// Prepares the next wake-up if it is within `lead_ns` (and no plan is armed).
+    /// Prepares the next wake-up if it is within `lead_ns` (and no plan is armed): stages
+    /// what `Engine::poll` loads and aborts for it, then publishes the plan with its
+    /// commit compare in one short critical section.
     pub fn prepare<L, T, P, H, const RX: usize, const A: usize, const Q: usize>(
         &mut self,
         engine: &mut Engine<'_, RX, A, Q>,
@@ -537,13 +606,14 @@ impl Protocol {
         // Bounded: each pass handles one wake-up that is already due, and a wake-up in the
         // future ends the loop; the bound only guards against a clock that stands still.
         for _ in 0..16 {
-            let (now, armed) = slot.lock(|c| (c.timer.now(), c.plan.is_armed()));
+            let (now_ticks, armed) = slot.lock(|c| (c.timer.ticks(), c.plan.is_armed()));
             if armed {
                 return;
             }
+            let now = T::ns_of(now_ticks);
             let at = engine.next_wakeup();
             if at == Nanos::MAX {
-                slot.lock(|c| c.timer.arm_prepare(u64::MAX));
+                slot.lock(|c| c.timer.arm(Alarm::Prepare, AlarmSetting::Off));
                 return;
             }
             // The takeover happens in a `poll` below (the engine then starts its first
@@ -551,11 +621,11 @@ impl Protocol {
             self.unmute_on_takeover(engine, slot);
             // Muted (bus-off): no plan (nothing may be applied); the engine runs at its
             // wake-ups and whatever it loads is held back by the gate.
-            let muted = self.mute != Mute::Off;
+            let muted = self.g.mute != Mute::Off;
             if at <= now {
                 if !muted {
                     // Too late to prepare: run it now, loading directly.
-                    self.stats.late_prepares = self.stats.late_prepares.saturating_add(1);
+                    self.g.stats.late_prepares = self.g.stats.late_prepares.saturating_add(1);
                 }
                 engine.poll(now, &mut self.gate(slot), host);
                 continue;
@@ -563,26 +633,42 @@ impl Protocol {
             let lead = if muted { 0 } else { self.lead_ns };
             if at - now > lead {
                 let ticks = T::ticks_of(at - lead);
-                slot.lock(|c| c.timer.arm_prepare(ticks));
+                let setting = AlarmSetting::new(ticks, now_ticks);
+                slot.lock(|c| c.timer.arm(Alarm::Prepare, setting));
+                Self::rescue_if_passed(slot, Alarm::Prepare, ticks);
                 return;
             }
             let ticks = T::ticks_of(at);
             slot.lock(|c| c.plan.arm(at));
             engine.poll(at, &mut self.gate(slot), host);
-            let on_time = slot.lock(|c| {
-                if !c.plan.is_armed() {
-                    return true;
+            // `now_ticks` is older than `at` (checked above), so the compare is never
+            // "due" here; if `at` passed while the engine ran, `rescue` raises it.
+            let setting = AlarmSetting::new(ticks, now_ticks);
+            let published = slot.lock(|c| {
+                let staged = c.plan.publish();
+                if staged {
+                    c.timer.arm(Alarm::Commit, setting);
                 }
-                if c.timer.arm_commit(ticks) {
-                    return true;
-                }
-                // Passed while preparing: commit now.
-                c.on_commit();
-                false
+                staged
             });
-            if on_time {
-                return;
+            if published {
+                Self::rescue_if_passed(slot, Alarm::Commit, ticks);
             }
+            return;
+        }
+    }
+
+    /// After arming `alarm` at `at_ticks`: if the clock has reached it meanwhile, the
+    /// compare may have been written after the counter passed it; `rescue` raises it
+    /// then. Two short sections (a clock read, then the check), not one long one.
+    fn rescue_if_passed<L, T, P>(slot: &mut L, alarm: Alarm, at_ticks: u64)
+    where
+        L: Lock<SlotCore<T, P>>,
+        T: SlotTimerHw,
+        P: TxPort,
+    {
+        if slot.lock(|c| c.timer.ticks()) >= at_ticks {
+            slot.lock(|c| c.timer.rescue(alarm));
         }
     }
 }

@@ -4,7 +4,9 @@
 //! until recovery, the RX path's stamps and bad input.
 #![allow(clippy::unwrap_used, clippy::indexing_slicing, clippy::panic)]
 
-use rtcan_board_common::protocol::{Direct, RxEvent, SlotCore, SlotTimerHw, Stamps, TxEvent};
+use rtcan_board_common::protocol::{
+    Alarm, AlarmSetting, Direct, RxEvent, SlotCore, SlotTimerHw, Stamps, TxEvent,
+};
 use rtcan_board_common::{Protocol, SlotPlan, TxImage, TxPort};
 use rtcan_core::driver::{Event, Host, Mailbox, Token, TxOutcome, TxResult};
 use rtcan_core::engine::Engine;
@@ -65,26 +67,66 @@ fn master_tables() -> NodeTables<'static> {
 
 struct Timer {
     now: Nanos,
+    /// Tick of the commit compare's match (`advance` runs the slot timer then).
     commit: Option<u64>,
     prepare: Option<u64>,
+    /// Alarms raised in software (armed when due, or rescued after a lost match).
+    raised: u32,
+    /// The protocol task is preempted right after arming the commit compare: the clock
+    /// jumps to this time then (its next reading sees it).
+    jump_at_commit_arm: Option<Nanos>,
+}
+
+impl Timer {
+    /// A raised alarm fires at the current time (rounded up to the next tick).
+    fn raise(&mut self, alarm: Alarm) {
+        self.raised += 1;
+        let at = Some(self.now.div_ceil(TICK));
+        match alarm {
+            Alarm::Commit => self.commit = at,
+            Alarm::Prepare => self.prepare = at,
+        }
+    }
 }
 
 impl SlotTimerHw for Timer {
-    fn now(&self) -> Nanos {
-        self.now
+    fn ticks(&self) -> u64 {
+        self.now / TICK
+    }
+    fn ns_of(ticks: u64) -> Nanos {
+        ticks * TICK
     }
     fn ticks_of(at: Nanos) -> u64 {
         at.div_ceil(TICK)
     }
-    fn arm_commit(&mut self, t: u64) -> bool {
-        if t * TICK <= self.now {
-            return false;
+    fn arm(&mut self, alarm: Alarm, setting: AlarmSetting) {
+        let at = match setting {
+            AlarmSetting::Off => None,
+            AlarmSetting::Due => return self.raise(alarm),
+            AlarmSetting::Compare { at_ticks, .. } | AlarmSetting::Later { at_ticks } => {
+                Some(at_ticks)
+            }
+        };
+        match alarm {
+            Alarm::Commit => {
+                self.commit = at;
+                if let Some(j) = self.jump_at_commit_arm.take() {
+                    self.now = j;
+                }
+            }
+            Alarm::Prepare => self.prepare = at,
         }
-        self.commit = Some(t);
-        true
     }
-    fn arm_prepare(&mut self, t: u64) {
-        self.prepare = (t != u64::MAX).then_some(t);
+    fn rescue(&mut self, alarm: Alarm) {
+        // The model's compare never misses, but a match at or before the current time
+        // that `advance` has not run yet is what the hardware would have lost: raise it.
+        let armed = match alarm {
+            Alarm::Commit => self.commit,
+            Alarm::Prepare => self.prepare,
+        };
+        if armed.is_some_and(|t| t * TICK <= self.now) {
+            self.raise(alarm);
+        }
     }
 }
 
@@ -153,6 +195,8 @@ impl Module {
                     now: 0,
                     commit: None,
                     prepare: None,
+                    raised: 0,
+                    jump_at_commit_arm: None,
                 },
                 plan: SlotPlan::new(),
                 tx: Port::default(),
@@ -163,6 +207,11 @@ impl Module {
     fn set_now(&mut self, t: Nanos) {
         self.core.timer.now = t;
         self.core.tx.now = t;
+    }
+
+    /// The time the test timer reads (it may have jumped in a critical section).
+    fn sync_port_time(&mut self) {
+        self.core.tx.now = self.core.timer.now;
     }
 
     fn run(&mut self) {
@@ -294,6 +343,39 @@ fn a_late_protocol_task_runs_the_boundary_directly_and_counts_it() {
     // The next boundary (slot 1, at 2 slots) is prepared normally: alarm half a slot ahead.
     assert!(!m.core.plan.is_armed());
     assert_eq!(m.core.timer.prepare, Some((2 * SLOT - LEAD) / TICK));
+}
+
+/// The protocol task is preempted between publishing the plan (with the commit compare)
+/// and its next clock reading, for `preempted_ns`: past the boundary, the compare's match
+/// may have been lost; the task raises it, and the slot timer (not the task) commits
+/// the plan, once. Short of the boundary, nothing is raised.
+#[test]
+fn a_boundary_passed_while_arming_is_raised_and_committed_by_the_slot_timer() {
+    for (preempted_ns, raised) in [(LEAD - 125, 0), (LEAD, 1), (LEAD + 7_000, 1)] {
+        let mut m = Module::new(master_tables(), Stamps::Ttcm);
+        m.run();
+        m.advance(SLOT - LEAD - 1);
+        m.set_now(SLOT - LEAD);
+        m.core.timer.prepare = None;
+        m.core.timer.jump_at_commit_arm = Some(SLOT - LEAD + preempted_ns);
+        m.run();
+        m.sync_port_time();
+        assert!(m.core.plan.is_published(), "{preempted_ns}");
+        assert_eq!(m.core.timer.raised, raised, "{preempted_ns}");
+        assert!(
+            m.core.tx.writes.is_empty(),
+            "the task never writes the plan"
+        );
+        let fire_at = SLOT.max(SLOT - LEAD + preempted_ns);
+        assert_eq!(m.core.timer.commit, Some(fire_at.div_ceil(TICK)));
+        m.advance(fire_at);
+        assert_eq!(m.core.tx.writes.len(), 1, "{preempted_ns}");
+        let (at, _, img, by_commit) = m.core.tx.writes[0];
+        assert_eq!((at, by_commit), (fire_at, true));
+        assert!(img.frame().unwrap().id().is_sync());
+        assert!(!m.core.plan.is_armed());
+        assert_eq!(m.proto.stats().late_prepares, 0);
+    }
 }
 
 #[test]

@@ -15,8 +15,10 @@ use crate::soft_can::SoftCan;
 use core::ptr::{read_volatile, write_volatile};
 use heapless::spsc::Queue;
 use heapless::Deque;
-use rtcan_board_common::protocol::{DynController, Lock, RxEvent, SlotCore, SlotTimerHw};
-use rtcan_board_common::wide_clock::{Arm, WideClock};
+use rtcan_board_common::protocol::{
+    Alarm, AlarmSetting, DynController, Lock, RxEvent, SlotCore, SlotTimerHw,
+};
+use rtcan_board_common::wide_clock::WideClock;
 use rtcan_board_common::{Protocol, SlotPlan, TxImage, TxPort};
 use rtcan_core::driver::{Controller, Host, Mailbox, Token, TxResult, MAILBOXES};
 use rtcan_core::engine::Engine;
@@ -43,10 +45,11 @@ pub struct ShadowTx {
     txrq: u8,
     /// Abort requests since the bus model last looked.
     abrq: u8,
-    /// SysTick reading at the first TXRQ write while `watch` is set.
+    /// SysTick reading at the first TXRQ write of a slot-timer interrupt: the bus model
+    /// sets `None` before the interrupt and `Some(0)` after it, so a write outside it
+    /// (the protocol task loading directly) pays the same two-instruction test as the
+    /// interrupt and records nothing.
     pub stamp: Option<u32>,
-    /// Record `stamp`.
-    pub watch: bool,
 }
 
 impl ShadowTx {
@@ -55,8 +58,7 @@ impl ShadowTx {
             regs: [[0; 4]; MAILBOXES],
             txrq: 0,
             abrq: 0,
-            stamp: None,
-            watch: false,
+            stamp: Some(0),
         }
     }
 
@@ -87,6 +89,8 @@ impl ShadowTx {
 }
 
 impl TxPort for ShadowTx {
+    // Inline, as the F103's: the slot-timer interrupt's stores, not a call.
+    #[inline(always)]
     fn write(&mut self, mailbox: usize, image: &TxImage) {
         if let Some(r) = self.regs.get_mut(mailbox) {
             let [tir, tdtr, tdlr, tdhr] = r;
@@ -97,7 +101,7 @@ impl TxPort for ShadowTx {
                 write_volatile(tdhr, image.tdhr);
                 write_volatile(tir, image.tir);
             }
-            if self.watch && self.stamp.is_none() {
+            if self.stamp.is_none() {
                 self.stamp = Some(systick_now());
             }
             self.txrq |= 1 << mailbox;
@@ -121,8 +125,11 @@ pub struct SimTimer {
     dier: u32,
     ccr1: u32,
     ccr3: u32,
-    commit_at: Option<Nanos>,
-    prepare_at: Nanos,
+    /// The bus model's view of the alarms: tick of the next match (`u64::MAX`: none). In
+    /// ticks, not ns: the critical sections store them, and a product there would count
+    /// as the firmware's work.
+    commit_at: u64,
+    prepare_at: u64,
 }
 
 impl SimTimer {
@@ -134,8 +141,8 @@ impl SimTimer {
             dier: 0,
             ccr1: 0,
             ccr3: 0,
-            commit_at: None,
-            prepare_at: Nanos::MAX,
+            commit_at: u64::MAX,
+            prepare_at: u64::MAX,
         }
     }
 
@@ -176,52 +183,88 @@ impl SimTimer {
         }
         // The bus model's view of the alarms.
         if commit {
-            self.commit_at = None;
+            self.commit_at = u64::MAX;
         }
         if prepare {
-            self.prepare_at = Nanos::MAX;
+            self.prepare_at = u64::MAX;
         }
+    }
+
+    /// Channel bits of `alarm`: (DIER enable, SR flag).
+    const fn bits(alarm: Alarm) -> (u32, u32) {
+        match alarm {
+            Alarm::Commit => (DIER_CC1IE, SR_CC1IF),
+            Alarm::Prepare => (DIER_CC3IE, SR_CC3IF),
+        }
+    }
+
+    fn set_at(&mut self, alarm: Alarm, at: u64) {
+        match alarm {
+            Alarm::Commit => self.commit_at = at,
+            Alarm::Prepare => self.prepare_at = at,
+        }
+    }
+
+    /// Software compare event (the F103's EGR write): flag and enable; the bus model
+    /// runs the interrupt at once.
+    fn raise(&mut self, alarm: Alarm) {
+        let (ie, flag) = Self::bits(alarm);
+        // SAFETY: plain RAM owned by `self`.
+        unsafe {
+            write_volatile(&mut self.sr, read_volatile(&self.sr) | flag);
+            write_volatile(&mut self.dier, read_volatile(&self.dier) | ie);
+        }
+        self.set_at(alarm, 0);
     }
 }
 
 impl SlotTimerHw for SimTimer {
-    fn now(&self) -> Nanos {
-        self.clock.ticks(self.cnt()) * TICK_NS
+    fn ticks(&self) -> u64 {
+        self.clock.ticks(self.cnt())
+    }
+    fn ns_of(ticks: u64) -> Nanos {
+        ticks * TICK_NS
     }
     fn ticks_of(at: Nanos) -> u64 {
         at.div_ceil(TICK_NS)
     }
-    fn arm_commit(&mut self, target: u64) -> bool {
-        let value = match WideClock::arm(target, self.clock.ticks(self.cnt())) {
-            Arm::Due => return false,
-            Arm::Compare(v) => v,
-            // Re-evaluated at the half-period events, as on the F103.
-            Arm::Later => 0,
+    // Inline: the alarm is a constant at each call site (as on the F103).
+    #[inline(always)]
+    fn arm(&mut self, alarm: Alarm, setting: AlarmSetting) {
+        let (ie, flag) = Self::bits(alarm);
+        let (value, target) = match setting {
+            AlarmSetting::Off => {
+                // SAFETY: plain RAM owned by `self`.
+                unsafe { write_volatile(&mut self.dier, read_volatile(&self.dier) & !ie) };
+                self.set_at(alarm, u64::MAX);
+                return;
+            }
+            AlarmSetting::Due => return self.raise(alarm),
+            AlarmSetting::Compare { value, at_ticks } => (value, at_ticks),
+            // Re-evaluated at the half-period events on the F103; the bus model wakes the
+            // node at the target itself.
+            AlarmSetting::Later { at_ticks } => (0, at_ticks),
+        };
+        let ccr = match alarm {
+            Alarm::Commit => &mut self.ccr1,
+            Alarm::Prepare => &mut self.ccr3,
         };
         // SAFETY: plain RAM owned by `self`.
         unsafe {
-            write_volatile(&mut self.ccr1, value as u32);
-            write_volatile(&mut self.sr, read_volatile(&self.sr) & !SR_CC1IF);
-            write_volatile(&mut self.dier, read_volatile(&self.dier) | DIER_CC1IE);
+            write_volatile(ccr, value as u32);
+            write_volatile(&mut self.sr, read_volatile(&self.sr) & !flag);
+            write_volatile(&mut self.dier, read_volatile(&self.dier) | ie);
         }
         // The compare matches at that tick (the bus model's event time).
-        self.commit_at = Some(target.saturating_mul(TICK_NS));
-        true
+        self.set_at(alarm, target);
     }
-    fn arm_prepare(&mut self, target: u64) {
-        if target == u64::MAX {
-            // SAFETY: plain RAM owned by `self`.
-            unsafe { write_volatile(&mut self.dier, read_volatile(&self.dier) & !DIER_CC3IE) };
-            self.prepare_at = Nanos::MAX;
-            return;
-        }
+    fn rescue(&mut self, alarm: Alarm) {
+        let (ie, flag) = Self::bits(alarm);
         // SAFETY: plain RAM owned by `self`.
-        unsafe {
-            write_volatile(&mut self.ccr3, target as u16 as u32);
-            write_volatile(&mut self.sr, read_volatile(&self.sr) & !SR_CC3IF);
-            write_volatile(&mut self.dier, read_volatile(&self.dier) | DIER_CC3IE);
+        let (sr, dier) = unsafe { (read_volatile(&self.sr), read_volatile(&self.dier)) };
+        if dier & ie != 0 && sr & flag == 0 {
+            self.raise(alarm);
         }
-        self.prepare_at = target.saturating_mul(TICK_NS);
     }
 }
 
@@ -407,28 +450,30 @@ impl<H: Host, const RX: usize, const A: usize, const Q: usize> Node
     }
     fn next_wake_bus(&self) -> Nanos {
         let t = &self.core.timer;
-        let at = t.commit_at.unwrap_or(Nanos::MAX).min(t.prepare_at);
-        at.saturating_sub(self.offset)
+        let at = t.commit_at.min(t.prepare_at);
+        if at == u64::MAX {
+            return Nanos::MAX;
+        }
+        at.saturating_mul(TICK_NS).saturating_sub(self.offset)
     }
     fn poll(&mut self, bus: Nanos, _meter: &mut dyn Meter) {
         let now = bus + self.offset;
         self.timer_interrupts += 1;
         self.core.timer.set(now);
         let t = &mut self.core.timer;
-        if t.commit_at.is_some_and(|at| at <= now) {
+        if t.commit_at.saturating_mul(TICK_NS) <= now {
             t.sr |= SR_CC1IF;
         }
-        if t.prepare_at <= now {
+        if t.prepare_at.saturating_mul(TICK_NS) <= now {
             t.sr |= SR_CC3IF;
         }
         let meter = self.meter;
         let core = &mut self.core;
-        core.tx.watch = true;
         core.tx.stamp = None;
         let mut pend = false;
         let start = meter.measure(Kind::IsrSlotTimer, &mut || pend = Self::slot_isr(core));
-        core.tx.watch = false;
-        if let Some(stamp) = core.tx.stamp.take() {
+        // Some: a TXRQ written in the interrupt; outside it the stamp stays `Some(0)`.
+        if let Some(stamp) = core.tx.stamp.replace(0) {
             meter.record_to_txrq(start, stamp);
         }
         self.core.tx.sync(&mut self.can);
@@ -445,7 +490,15 @@ impl<H: Host, const RX: usize, const A: usize, const Q: usize> Node
         self.core.timer.set(now + self.offset);
         let (fifo, q, meter) = (&mut self.fifo, &mut self.rxq, self.meter);
         let timer = &self.core.timer;
-        meter.measure(Kind::IsrCanRx, &mut || can_rx_isr(fifo, timer, q));
+        // The F103's RX interrupt reads the clock under the slot-timer resource's lock
+        // (priority 3 below the slot timer's 4): that read is a critical section too,
+        // measured alone (not nested: the meter's own work would count in the row).
+        let mut ticks = 0;
+        meter.measure(Kind::CriticalSection, &mut || ticks = timer.ticks());
+        meter.measure(Kind::IsrCanRx, &mut || {
+            can_rx_isr(fifo, SimTimer::ns_of(timer.ticks()), q)
+        });
+        let _ = ticks;
         self.protocol_task();
     }
     fn tx_done(&mut self, mailbox: Mailbox, result: TxResult, now: Nanos, _meter: &mut dyn Meter) {
@@ -464,9 +517,9 @@ impl<H: Host, const RX: usize, const A: usize, const Q: usize> Node
     }
 }
 
-/// The CAN RX interrupt body: every frame of FIFO 0 with the local time into the queue.
-fn can_rx_isr(fifo: &mut ShadowFifo, timer: &SimTimer, q: &mut Queue<RxEvent, 8>) {
-    let now = timer.now();
+/// The CAN RX interrupt body: every frame of FIFO 0 with the local time `now` into the
+/// queue.
+fn can_rx_isr(fifo: &mut ShadowFifo, now: Nanos, q: &mut Queue<RxEvent, 8>) {
     loop {
         // SAFETY: plain RAM; volatile as the FIFO registers.
         let rfr = unsafe { read_volatile(&fifo.rfr) };

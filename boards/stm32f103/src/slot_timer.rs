@@ -4,8 +4,8 @@
 //! channel 1 commits the prepared slot plan (boards/common `protocol`), compare channel 3
 //! is the prepare alarm that pends the protocol task ahead of a wake-up. No polling and
 //! no busy wait: between events the CPU sleeps.
-use rtcan_board_common::protocol::SlotTimerHw;
-use rtcan_board_common::wide_clock::{Arm, WideClock};
+use rtcan_board_common::protocol::{Alarm, AlarmSetting, SlotTimerHw};
+use rtcan_board_common::wide_clock::WideClock;
 use rtcan_core::time::Nanos;
 use stm32f1xx_hal::pac;
 use stm32f1xx_hal::rcc::Enable;
@@ -99,13 +99,19 @@ impl SlotTimer {
         })
     }
 
-    fn ticks(&self) -> u64 {
+    /// Local time in ticks (two reads: the counter and the half-period count).
+    pub fn ticks(&self) -> u64 {
         self.clock.ticks(self.tim.cnt().read().bits() as u16)
     }
 
     /// Local time in ns.
     pub fn now(&self) -> Nanos {
-        self.ticks() * TICK_NS
+        Self::ns_of(self.ticks())
+    }
+
+    /// Local time of tick `ticks`, ns (outside critical sections: a 64-bit product).
+    pub const fn ns_of(ticks: u64) -> Nanos {
+        ticks * TICK_NS
     }
 
     fn set_ie(&mut self, ch: Channel, on: bool) {
@@ -118,37 +124,58 @@ impl SlotTimer {
         });
     }
 
-    /// Arms `ch` at tick `target`; false if it has already passed.
-    fn arm(&mut self, ch: Channel, target: u64) -> bool {
-        let later = match WideClock::arm(target, self.ticks()) {
-            Arm::Due => {
+    /// Applies `setting` (decided before the caller's critical section) to `ch`:
+    /// register writes only. The caller reads the clock again and calls `rescue` if the
+    /// target passed meanwhile (the counter may have passed the value before it was
+    /// written: no match until the wrap).
+    #[inline(always)]
+    fn apply(&mut self, ch: Channel, setting: AlarmSetting) {
+        let later = match setting {
+            AlarmSetting::Off => {
                 self.set_ie(ch, false);
-                return false;
+                None
             }
-            Arm::Compare(value) => {
+            AlarmSetting::Due => {
+                self.raise(ch);
+                None
+            }
+            AlarmSetting::Compare { value, .. } => {
                 self.tim
                     .ccr(ch.index())
                     .write(|w| unsafe { w.bits(value as u32) });
                 // rc_w0: clear only this flag (a match of the old value).
                 self.tim.sr().write(|w| unsafe { w.bits(!ch.flag()) });
                 self.set_ie(ch, true);
-                // The counter may have passed `value` while it was written.
-                if self.ticks() >= target {
-                    self.set_ie(ch, false);
-                    return false;
-                }
                 None
             }
-            Arm::Later => {
+            AlarmSetting::Later { at_ticks } => {
                 self.set_ie(ch, false);
-                Some(target)
+                Some(at_ticks)
             }
         };
         match ch {
             Channel::Commit => self.commit_later = later,
             Channel::Prepare => self.prepare_later = later,
         }
-        true
+    }
+
+    /// Arms a far target that came into range, in the interrupt: against a fresh reading,
+    /// raised if it passed meanwhile.
+    fn arm_now(&mut self, ch: Channel, target: u64) {
+        self.apply(ch, AlarmSetting::new(target, self.ticks()));
+        if self.ticks() >= target {
+            self.rescue_channel(ch);
+        }
+    }
+
+    /// The clock passed `ch`'s target: if its interrupt is still enabled and its flag
+    /// not set, the match was lost; raise it.
+    fn rescue_channel(&mut self, ch: Channel) {
+        let sr = self.tim.sr().read().bits();
+        let dier = self.tim.dier().read().bits();
+        if dier & ch.ie() != 0 && sr & ch.flag() == 0 {
+            self.raise(ch);
+        }
     }
 
     /// Ticks from the commit compare's match to now (bench builds: the slot boundary's
@@ -197,14 +224,10 @@ impl SlotTimer {
             }
             // A far target may now be within compare range.
             if let Some(t) = self.commit_later.take() {
-                if !self.arm(Channel::Commit, t) {
-                    self.raise(Channel::Commit);
-                }
+                self.arm_now(Channel::Commit, t);
             }
             if let Some(t) = self.prepare_later.take() {
-                if !self.arm(Channel::Prepare, t) {
-                    self.raise(Channel::Prepare);
-                }
+                self.arm_now(Channel::Prepare, t);
             }
         }
     }
@@ -228,23 +251,31 @@ pub struct TimerFlags {
     pub prepare: bool,
 }
 
+impl Channel {
+    const fn of(alarm: Alarm) -> Self {
+        match alarm {
+            Alarm::Commit => Channel::Commit,
+            Alarm::Prepare => Channel::Prepare,
+        }
+    }
+}
+
 impl SlotTimerHw for SlotTimer {
-    fn now(&self) -> Nanos {
-        SlotTimer::now(self)
+    fn ticks(&self) -> u64 {
+        SlotTimer::ticks(self)
+    }
+    fn ns_of(ticks: u64) -> Nanos {
+        SlotTimer::ns_of(ticks)
     }
     fn ticks_of(at: Nanos) -> u64 {
         at.div_ceil(TICK_NS)
     }
-    fn arm_commit(&mut self, at_ticks: u64) -> bool {
-        self.arm(Channel::Commit, at_ticks)
+    // Inline: the alarm is a constant at each call site.
+    #[inline(always)]
+    fn arm(&mut self, alarm: Alarm, setting: AlarmSetting) {
+        self.apply(Channel::of(alarm), setting);
     }
-    fn arm_prepare(&mut self, at_ticks: u64) {
-        if at_ticks == u64::MAX {
-            self.prepare_later = None;
-            self.set_ie(Channel::Prepare, false);
-        } else if !self.arm(Channel::Prepare, at_ticks) {
-            // Already due: pend the timer interrupt through the compare event.
-            self.raise(Channel::Prepare);
-        }
+    fn rescue(&mut self, alarm: Alarm) {
+        self.rescue_channel(Channel::of(alarm));
     }
 }
