@@ -122,7 +122,10 @@ impl Bus {
             );
         }
         sim.run_until(0);
-        let given = mcus.iter().map(|m| (ErrorState::default(), m.st.resets)).collect();
+        let given = mcus
+            .iter()
+            .map(|m| (ErrorState::default(), m.st.resets))
+            .collect();
         Bus {
             mcus,
             sim,
@@ -201,7 +204,8 @@ impl Bus {
             };
             if !m.st.can.bus_confinement || state != given.0 {
                 m.st.can.bus_confinement = true;
-                m.st.can.set_error_state(state.tec, state.rec, state.bus_off);
+                m.st.can
+                    .set_error_state(state.tec, state.rec, state.bus_off);
                 given.0 = state;
             }
         }

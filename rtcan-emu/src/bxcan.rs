@@ -363,9 +363,8 @@ impl BxCan {
     /// passive (128) or bus-off level raises ERRI (§24.7.6, §24.9.2 CAN_MSR), as a
     /// bus-off recovery does.
     pub fn set_error_state(&mut self, tec: u16, rec: u16, bus_off: bool) {
-        let levels = |tec: u32, rec: u32, off: bool| {
-            (tec >= 96 || rec >= 96, tec > 127 || rec > 127, off)
-        };
+        let levels =
+            |tec: u32, rec: u32, off: bool| (tec >= 96 || rec >= 96, tec > 127 || rec > 127, off);
         let before = levels(self.tec, self.rec, self.bus_off);
         self.tec = u32::from(tec);
         self.rec = u32::from(rec);

@@ -135,7 +135,10 @@ fn run(args: Vec<String>) -> Result<(), (u8, String)> {
     robot.bus.sim.set_bit_error_rate(a.ber);
     for spec in &a.faults {
         let f = rtcan_sim::fault::parse(spec, &MODULES).map_err(|e| (2, e))?;
-        robot.bus.schedule(f).map_err(|e| (2, format!("--fault `{spec}`: {e}")))?;
+        robot
+            .bus
+            .schedule(f)
+            .map_err(|e| (2, format!("--fault `{spec}`: {e}")))?;
     }
     // SRT publication instants from the publishers' RAM (docs/EMULATOR.md, "The report").
     robot.watch_publications(&plan, &images);

@@ -47,7 +47,11 @@ impl Publications {
     pub fn locate(plan: &Plan, images: &[Vec<u8>]) -> (Publications, Vec<String>) {
         let mut out = Publications::default();
         let mut missing = Vec::new();
-        for t in plan.topics.iter().filter(|t| t.class == Class::Srt && t.on_bus) {
+        for t in plan
+            .topics
+            .iter()
+            .filter(|t| t.class == Class::Srt && t.on_bus)
+        {
             let Some(elf) = images.get(t.module) else {
                 missing.push(t.name.clone());
                 continue;

@@ -134,7 +134,9 @@ fn bad_arguments() {
     let (code, _, err) = emu(&["--fault", "motor1:stall=5ms@1s"]);
     assert_eq!(code, 2);
     assert!(
-        err.contains("--fault `motor1:stall=5ms@1s`: fault Stall(5000000) is not modelled under emulation"),
+        err.contains(
+            "--fault `motor1:stall=5ms@1s`: fault Stall(5000000) is not modelled under emulation"
+        ),
         "{err}"
     );
 }

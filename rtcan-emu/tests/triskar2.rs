@@ -285,7 +285,13 @@ fn bus_off_and_recovery() {
     );
     // Error-active again everywhere: good frames brought REC back (127 → 119 and down).
     for i in 0..6 {
-        assert_eq!(esr(&mut bus, i) & 3, 0, "{}: ESR {:#x}", MODULES[i], esr(&mut bus, i));
+        assert_eq!(
+            esr(&mut bus, i) & 3,
+            0,
+            "{}: ESR {:#x}",
+            MODULES[i],
+            esr(&mut bus, i)
+        );
     }
     // Back at 200 Hz within three cycles of the recovery.
     assert!(

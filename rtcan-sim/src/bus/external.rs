@@ -157,3 +157,135 @@ impl<M: Module> Bus<M> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bus::NodeSetup;
+    use crate::controller::{Filter, SimController};
+    use rtcan_core::driver::{Mailbox, TxResult};
+    use rtcan_core::id::CanId;
+    use rtcan_core::timing::{bits_to_ns, exact_bits, INTERMISSION_BITS};
+
+    /// A node whose controller is driven from outside: it reacts to nothing.
+    struct Outside;
+    impl Module for Outside {
+        fn start(&mut self, _: Nanos, _: &mut SimController) -> Option<Nanos> {
+            None
+        }
+        fn wake(&mut self, _: Nanos, _: &mut SimController) -> Option<Nanos> {
+            None
+        }
+        fn rx(&mut self, _: &Frame, _: Nanos, _: Nanos, _: &mut SimController) -> Option<Nanos> {
+            None
+        }
+        fn tx_done(
+            &mut self,
+            _: Mailbox,
+            _: TxResult,
+            _: Nanos,
+            _: &mut SimController,
+        ) -> Option<Nanos> {
+            None
+        }
+        fn rx_overrun(&mut self, _: Nanos) {}
+    }
+
+    fn frame(raw: u32) -> Frame {
+        Frame::new(CanId::from_raw(raw).unwrap(), &[1, 2, 3]).unwrap()
+    }
+
+    fn bus(n: usize) -> Bus<Outside> {
+        let mut b = Bus::new(1_000_000, 0.0, 1);
+        for _ in 0..n {
+            b.add_node(
+                Outside,
+                NodeSetup {
+                    filter: Filter::Rules(Vec::new()),
+                    ..NodeSetup::default()
+                },
+            );
+        }
+        b.run_until(0);
+        b
+    }
+
+    #[test]
+    fn offers_arbitrate_and_time_the_frame_exactly() {
+        let mut b = bus(3);
+        b.run_until(5_000);
+        assert_eq!(b.activity(), Activity::Idle { from: 0 });
+        b.set_offer(1, Some((2, frame(0x300))));
+        b.set_offer(2, Some((0, frame(0x200))));
+        // The start of frame now; the decision one bit later.
+        assert_eq!(b.activity(), Activity::Arbitrating { sof: 5_000 });
+        assert_eq!(b.next_event_at(), Some(6_000));
+        b.run_until(6_000);
+        let body = exact_bits(&frame(0x200)) - INTERMISSION_BITS;
+        let end = 5_000 + bits_to_ns(body, 1_000_000);
+        let Activity::Busy(w) = b.activity() else {
+            panic!("no frame on the wire: {:?}", b.activity());
+        };
+        assert_eq!(
+            w,
+            OnWire {
+                node: 2,
+                mailbox: 0,
+                frame: frame(0x200),
+                sof: 5_000,
+                end,
+                ok: true
+            }
+        );
+        assert_eq!(b.arbitration_offers(), &[(0x300, 1, 2), (0x200, 2, 0)][..]);
+        // Receivers: everyone but the transmitter; no filter or FIFO of the bus's.
+        assert_eq!(
+            (0..3).map(|n| b.takes_frame(n)).collect::<Vec<_>>(),
+            vec![true, true, false]
+        );
+        // The loser withdraws; the winner's mailbox stays the bus's until the end.
+        b.set_offer(1, None);
+        b.set_offer(2, None);
+        assert!(b.controller(2).unwrap().mailbox(0).is_some());
+        assert!(!b.controller(1).unwrap().has_pending());
+        b.run_until(end);
+        assert_eq!(b.wire.len(), 1);
+        assert_eq!(b.wire[0].end, end);
+        assert!(b.wire[0].ok);
+        assert_eq!(
+            b.activity(),
+            Activity::Idle {
+                from: end + bits_to_ns(INTERMISSION_BITS, 1_000_000)
+            }
+        );
+        assert!(!b.controller(2).unwrap().has_pending());
+        assert_eq!(b.controller(2).unwrap().conf.state().tec, 0);
+    }
+
+    #[test]
+    fn a_bus_held_dominant_destroys_the_frame_and_takes_the_sender_bus_off() {
+        let mut b = bus(2);
+        b.set_offer(0, Some((0, frame(0x400))));
+        b.run_until(1_000);
+        assert!(b.takes_frame(1));
+        b.set_stuck(0, true);
+        assert_eq!(b.stuck_node(), Some(0));
+        let Activity::Busy(w) = b.activity() else {
+            panic!("no frame");
+        };
+        assert!(!w.ok);
+        assert!(!b.takes_frame(1));
+        assert!(b.controller(0).unwrap().conf.is_bus_off());
+        assert_eq!(b.controller(1).unwrap().conf.state().rec, 255);
+        // A controller reset with its MCU: counters back to power-on values, the frame
+        // on the wire still the bus's.
+        b.reset_controller(0);
+        let c = b.controller(0).unwrap();
+        assert_eq!(
+            c.conf.state(),
+            rtcan_core::confinement::ErrorState::default()
+        );
+        assert_eq!(c.conf.bus_off_entries, 1);
+        assert!(c.mailbox(0).is_some());
+    }
+}
