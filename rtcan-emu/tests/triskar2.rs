@@ -284,12 +284,12 @@ fn bus_off_and_recovery() {
         "recovered after 128 x 11 recessive bits"
     );
     // Error-active again everywhere: good frames brought REC back (127 → 119 and down).
-    for i in 0..6 {
+    for (i, name) in MODULES.iter().enumerate() {
         assert_eq!(
             esr(&mut bus, i) & 3,
             0,
             "{}: ESR {:#x}",
-            MODULES[i],
+            name,
             esr(&mut bus, i)
         );
     }
