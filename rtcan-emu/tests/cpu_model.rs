@@ -154,7 +154,14 @@ fn slot_latency_jitter_and_srt_latency_agree_with_the_cpu_model() {
         }
         compared += 1;
         assert_eq!(e.misses, 0, "{}: emulated SRT misses", e.name);
-        assert_eq!(e.count, s.count, "{}: messages", e.name);
+        // Messages whose deadline falls in the window: ±1 at its edges.
+        assert!(
+            e.count.abs_diff(s.count) <= 1,
+            "{}: {} messages vs {}",
+            e.name,
+            e.count,
+            s.count
+        );
         assert!(
             (e.mean_ns() - s.mean_ns()).abs() <= SRT_TOLERANCE_NS,
             "{}: SRT mean {} ns vs model {} ns",
@@ -163,9 +170,8 @@ fn slot_latency_jitter_and_srt_latency_agree_with_the_cpu_model() {
             s.mean_ns()
         );
     }
-    // teleop is the SRT topic with bus traffic in Triskar2 (velocity stays on its module,
-    // proximity_read's service topics carry no calls).
-    assert!(compared >= 1, "teleop compared");
+    // teleop and velocity carry traffic (proximity_read's service topics no calls).
+    assert!(compared >= 2, "teleop and velocity compared");
 }
 
 /// SRT latency tolerance, emulation against the CPU model (docs/EMULATOR.md): a
