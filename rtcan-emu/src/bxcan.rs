@@ -112,6 +112,10 @@ pub struct BxCan {
     bus_off: bool,
     /// Bit time at which automatic bus-off recovery completes (ABOM, §24.7.6).
     recover_at: Option<u64>,
+    /// TEC, REC and bus-off are the bus's (rtcan-sim's fault confinement, given by
+    /// `set_error_state`), not counted here: set when this bxCAN is a node of a bus that
+    /// counts them for every controller.
+    pub bus_confinement: bool,
     // Filters (§24.9.4).
     fmr: u32,
     fm1r: u32,
@@ -140,6 +144,7 @@ impl Default for BxCan {
             lec: 0,
             bus_off: false,
             recover_at: None,
+            bus_confinement: false,
             fmr: 0x2A1C_0E01,
             fm1r: 0,
             fs1r: 0,
@@ -201,7 +206,10 @@ impl BxCan {
     fn mcr_write(&mut self, v: u32, bit: u64) {
         // RESET (bit 15): master reset, back to sleep with reset values (§24.9.2).
         if v & (1 << 15) != 0 {
+            // Where the error counters live is the board's wiring, not a register.
+            let bus = self.bus_confinement;
             *self = BxCan::default();
+            self.bus_confinement = bus;
             return;
         }
         self.mcr = v & 0x0001_00FF;
@@ -300,7 +308,9 @@ impl BxCan {
         let abort = self.tx_flags & (1 << (7 + shift)) != 0;
         if ok {
             self.tx_flags = (self.tx_flags & !(0xFF << shift)) | (0b11 << shift);
-            self.tec = self.tec.saturating_sub(1);
+            if !self.bus_confinement {
+                self.tec = self.tec.saturating_sub(1);
+            }
             if let Some(b) = self.tx.get_mut(m) {
                 b.pending = false;
             }
@@ -308,9 +318,11 @@ impl BxCan {
         }
         self.lec = 3; // form error stands for "a transmit error" here
         self.msr_irq |= 1 << 2;
-        self.tec += 8;
-        if self.tec > 255 {
-            self.enter_bus_off(bit);
+        if !self.bus_confinement {
+            self.tec += 8;
+            if self.tec > 255 {
+                self.enter_bus_off(bit);
+            }
         }
         if abort || self.mcr & (1 << 4) != 0 || self.bus_off {
             // RQCP with TERR, TXOK clear; the mailbox empties (§24.7.3 "abort", NART).
@@ -346,6 +358,23 @@ impl BxCan {
         }
     }
 
+    /// The bus's fault confinement for this controller (`bus_confinement`): TEC, REC and
+    /// bus-off as ESR shows them (§24.9.2 CAN_ESR); a change of the warning (96),
+    /// passive (128) or bus-off level raises ERRI (§24.7.6, §24.9.2 CAN_MSR), as a
+    /// bus-off recovery does.
+    pub fn set_error_state(&mut self, tec: u16, rec: u16, bus_off: bool) {
+        let levels =
+            |tec: u32, rec: u32, off: bool| (tec >= 96 || rec >= 96, tec > 127 || rec > 127, off);
+        let before = levels(self.tec, self.rec, self.bus_off);
+        self.tec = u32::from(tec);
+        self.rec = u32::from(rec);
+        self.bus_off = bus_off;
+        self.recover_at = None;
+        if levels(self.tec, self.rec, self.bus_off) != before {
+            self.msr_irq |= 1 << 2;
+        }
+    }
+
     pub fn is_bus_off(&self) -> bool {
         self.bus_off
     }
@@ -356,7 +385,9 @@ impl BxCan {
         if self.mode != Mode::Normal || self.bus_off {
             return;
         }
-        self.rec = self.rec.saturating_sub(1);
+        if !self.bus_confinement {
+            self.rec = self.rec.saturating_sub(1);
+        }
         let Some((fifo, fmi)) = self.filter(f) else {
             return;
         };

@@ -84,6 +84,8 @@ pub fn locate(elf: &[u8]) -> Result<CountersAt, String> {
 /// member `must_have`) found inside the static variable named `static_name`, walking
 /// its type breadth-first through struct and union members (MaybeUninit, ManuallyDrop,
 /// Driver, Engine...). Works for any static of the image, e.g. a topic's `TopicStats`.
+/// A generic struct matches by its name without parameters (`PoolState` for
+/// `PoolState<4>`).
 pub fn find_struct(
     elf: &[u8],
     static_name: &str,
@@ -144,7 +146,12 @@ pub fn find_struct(
             gimli::DW_TAG_structure_type | gimli::DW_TAG_union_type => {}
             _ => continue,
         }
-        let wanted = attr_name(&dwarf, unit, &e).as_deref() == Some(type_name);
+        // A generic type's DWARF name carries its parameters (`PoolState<4>`).
+        let wanted = attr_name(&dwarf, unit, &e).is_some_and(|n| {
+            n == type_name
+                || n.strip_prefix(type_name)
+                    .is_some_and(|rest| rest.starts_with('<'))
+        });
         let mut fields = Vec::new();
         let mut children = node.children();
         while let Ok(Some(child)) = children.next() {

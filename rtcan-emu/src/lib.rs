@@ -13,6 +13,7 @@ pub mod engine_ram;
 pub mod mcu;
 pub mod periph;
 pub mod probe;
+pub mod publications;
 pub mod report;
 pub mod robot;
 pub mod rtt;

@@ -11,13 +11,16 @@ use rtcan_sim::triskar::report::{triskar_json, triskar_text};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-const USAGE: &str = "usage: rtcan-emu [--images DIR] [--robot FILE] [--seconds N] [--seed N] [--cpi X] [--json]
+const USAGE: &str = "usage: rtcan-emu [--images DIR] [--robot FILE] [--seconds N] [--seed N] [--cpi X] [--ber X] [--fault SPEC]... [--json]
   --images DIR  the six Triskar2 ELF files (default examples/triskar2/target/thumbv7m-none-eabi/release)
   --robot FILE  the robot the images were built from (default robot.toml)
   --seconds N   emulated time, 0 < N <= 3600 (default 10, as `rtcan sim` for triskar2)
   --seed N      seed of the plant's sensor noise (default 1)
   --cpi X       core cycles per instruction, wait states included, 0.5 <= X <= 10
                 (default: 1.0 + 0.25 per flash wait state = 1.5 at 72 MHz)
+  --ber X       bit error rate of the bus, 0 <= X < 1 (rtcan-sim's error frames; default 0)
+  --fault SPEC  a fault of rtcan-sim's bus at a time, as `rtcan sim --fault`:
+                MODULE:stuck@T, release, partition, rejoin, reset (e.g. motor1:stuck@2s)
   --json        the report as JSON (the fields of `rtcan sim --json`, plus `emulation`)";
 
 fn main() -> ExitCode {
@@ -36,6 +39,8 @@ struct Args {
     seconds: f64,
     seed: u64,
     timing: Timing,
+    faults: Vec<String>,
+    ber: f64,
     json: bool,
 }
 
@@ -46,6 +51,8 @@ fn parse(args: Vec<String>) -> Result<Option<Args>, (u8, String)> {
         seconds: 10.0,
         seed: 1,
         timing: Timing::default(),
+        faults: Vec::new(),
+        ber: 0.0,
         json: false,
     };
     let mut it = args.into_iter();
@@ -76,6 +83,16 @@ fn parse(args: Vec<String>) -> Result<Option<Args>, (u8, String)> {
                     per_wait_state: 0.0,
                     ..Timing::default()
                 };
+            }
+            "--fault" => a.faults.push(value("--fault")?),
+            "--ber" => {
+                let ber: f64 = value("--ber")?
+                    .parse()
+                    .map_err(|_| (2, "bad --ber".to_string()))?;
+                if !(ber.is_finite() && (0.0..1.0).contains(&ber)) {
+                    return Err((2, format!("--ber must be in [0, 1), got {ber}")));
+                }
+                a.ber = ber;
             }
             "--json" => a.json = true,
             "-h" | "--help" => {
@@ -115,6 +132,16 @@ fn run(args: Vec<String>) -> Result<(), (u8, String)> {
     let wall = 1.5;
     let mut robot =
         EmuRobot::new(&plan, mcus, wall, a.seed, HostScript::default()).map_err(|e| (1, e))?;
+    robot.bus.sim.set_bit_error_rate(a.ber);
+    for spec in &a.faults {
+        let f = rtcan_sim::fault::parse(spec, &MODULES).map_err(|e| (2, e))?;
+        robot
+            .bus
+            .schedule(f)
+            .map_err(|e| (2, format!("--fault `{spec}`: {e}")))?;
+    }
+    // SRT publication instants from the publishers' RAM (docs/EMULATOR.md, "The report").
+    robot.watch_publications(&plan, &images);
     let mut raw = vec![Vec::new(); MODULES.len()];
     let t0 = cpu_seconds();
     let end_ns = (a.seconds * 1e9) as u64;

@@ -94,6 +94,8 @@ pub struct State {
     pub taken: std::collections::BTreeMap<u16, u64>,
     /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
     pub asleep_ps: u64,
+    /// Resets (power-on, NRST, watchdog, SYSRESETREQ) since creation.
+    pub resets: u32,
     exc_return: bool,
     wfi: bool,
     pub fault: Option<String>,
@@ -512,6 +514,7 @@ impl Mcu {
             probe: crate::probe::SlotProbe::default(),
             taken: Default::default(),
             asleep_ps: 0,
+            resets: 0,
             exc_return: false,
             wfi: false,
             fault: None,
@@ -705,6 +708,7 @@ impl Mcu {
     pub fn reset(&mut self) -> Result<(), EmuError> {
         let now = self.st.now();
         let st = &mut self.st;
+        st.resets += 1;
         st.scs = Scs::default();
         st.rcc = Rcc::default();
         st.flash = Flash::default();

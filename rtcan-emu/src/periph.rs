@@ -367,6 +367,9 @@ pub struct Tim2 {
     synced: u64,
     /// Part of a timer-clock cycle carried over, in ps·Hz (less than 10^12).
     carry: u64,
+    /// Time (ps) CR1.CEN last went from 0 to 1: the origin of a clock the image keeps
+    /// by counting this timer's ticks (the slot timer's `now`, message stamps).
+    pub started_ps: Option<u64>,
 }
 
 impl Tim2 {
@@ -524,7 +527,13 @@ impl Tim2 {
 
     pub fn write(&mut self, off: u32, v: u32) -> Access {
         match off {
-            0x00 => self.cr1 = v & 0x3FF,
+            0x00 => {
+                // `sync` brought `synced` to the time of this write.
+                if self.cr1 & 1 == 0 && v & 1 != 0 {
+                    self.started_ps = Some(self.synced);
+                }
+                self.cr1 = v & 0x3FF;
+            }
             0x04 => self.cr2 = v & 0xF8,
             0x08 => self.smcr = v & 0xFFF7,
             0x0C => self.dier = v & 0x5F5F,

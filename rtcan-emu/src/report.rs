@@ -1,6 +1,6 @@
 //! What a run of the emulated robot shows: bus load, per-identifier counts and period
 //! jitter, per-module instructions, unknown register accesses and decoded defmt lines.
-use crate::bus::{frame_bits, Bus};
+use crate::bus::Bus;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 
@@ -32,10 +32,11 @@ pub fn id_stats(bus: &Bus) -> BTreeMap<u32, (usize, f64, f64)> {
         .collect()
 }
 
-/// Fraction of bus time occupied by frames (intermission included) up to bit `bits`.
+/// Fraction of bus time occupied by frames and error frames (intermissions included, as
+/// rtcan-sim's bus counts it) up to bit `bits`.
 pub fn bus_load(bus: &Bus, bits: u64) -> f64 {
-    let busy: u64 = bus.log.iter().map(|(_, f, _)| frame_bits(f)).sum();
-    busy as f64 / bits.max(1) as f64
+    let busy_bits = bus.sim.stats.busy_ns / (bus.bit_ps / 1_000).max(1);
+    busy_bits as f64 / bits.max(1) as f64
 }
 
 /// The report as JSON; `logs` are the decoded defmt lines per module.

@@ -18,8 +18,6 @@
 //! after their stop bit.
 use std::collections::VecDeque;
 
-use rtcan_core::frame::Frame;
-use rtcan_core::id::CanId;
 use rtcan_core::Nanos;
 use rtcan_model::Plan;
 use rtcan_sim::candump::Entry;
@@ -28,7 +26,8 @@ use rtcan_sim::plant::World;
 use rtcan_sim::triskar::physics::{Physics, TICK_NS};
 use triskar2_nodes::kinematics::Twist;
 
-use crate::bus::{frame_bits, Bus};
+pub use crate::bus::raw_to_frame;
+use crate::bus::Bus;
 use crate::mcu::Mcu;
 
 /// Module names in bus order (robot.toml's module order = the images' module index).
@@ -245,6 +244,15 @@ impl EmuRobot {
         })
     }
 
+    /// Reads the SRT publication instants from the publishers' RAM from now on
+    /// (`publications`: the report's SRT latency is then measured from them); `images`
+    /// in `MODULES` order. Returns the SRT topics whose stamps were not found.
+    pub fn watch_publications(&mut self, plan: &Plan, images: &[Vec<u8>]) -> Vec<String> {
+        let (p, missing) = crate::publications::Publications::locate(plan, images);
+        self.bus.publications = Some(p);
+        missing
+    }
+
     /// Plant time, ns.
     pub fn now_ns(&self) -> Nanos {
         self.t_ns
@@ -447,33 +455,9 @@ impl EmuRobot {
         self.decoded = self.bus.log.len();
     }
 
-    /// The bus log as rtcan-sim wire frames (global ns; `end` = end of EOF, as the
-    /// simulator's bus reports it, intermission excluded).
+    /// The frames on the wire as rtcan-sim's bus recorded them (global ns; `end` = end
+    /// of EOF, or of the error delimiter for a destroyed frame).
     pub fn wire(&self) -> Vec<rtcan_sim::WireFrame> {
-        let bit_ns = self.bus.bit_ps / PS_NS;
-        self.bus
-            .log
-            .iter()
-            .filter_map(|(node, f, sof)| {
-                let frame = raw_to_frame(f)?;
-                let bits = frame_bits(f).saturating_sub(3);
-                Some(rtcan_sim::WireFrame {
-                    sof: sof * bit_ns,
-                    end: (sof + bits) * bit_ns,
-                    node: *node,
-                    frame,
-                    ok: true,
-                    partial: false,
-                })
-            })
-            .collect()
+        self.bus.sim.wire.clone()
     }
-}
-
-/// An extended data frame as rtcan-core's `Frame` (RTCAN uses nothing else).
-pub fn raw_to_frame(f: &crate::bxcan::RawFrame) -> Option<Frame> {
-    if !f.ide || f.rtr {
-        return None;
-    }
-    Frame::from_parts(CanId::from_raw(f.id)?, f.dlc.min(8), f.data)
 }

@@ -6,10 +6,9 @@
 //!
 //! - HRT periods, jitter and misses, bus load, slot overlaps: rtcan-sim's `Meter` and
 //!   `slots::overlaps` over the emulated bus's frames (the same code as the simulator).
-//! - SRT latency: from the first fragment's TXRQ store (emulated instruction stream) to
-//!   the end of the last fragment on the wire, against the topic's deadline. The
-//!   simulator measures from the publication; the time a message waits in the engine's
-//!   queue for a free window is inside the images' RAM, not visible here.
+//! - SRT latency: from the publication (the stamp the publisher's `Topic` wrote into its
+//!   RAM, `publications`) to the end of the last fragment on the wire, against the
+//!   topic's deadline, as the simulator measures it.
 //! - CPU (`run.cpu`): the slot-timer → TXRQ latency and the busy time measured on the
 //!   emulated core (`probe`), design `emulated`.
 //! - Robot: the simulator's plant (path, gap, wall), odometry and the host-bound
@@ -24,7 +23,6 @@ use rtcan_core::fragment::{counter_of, fragment_count};
 use rtcan_core::sync::parse_sync;
 use rtcan_core::{Class, Nanos};
 use rtcan_model::Plan;
-use rtcan_sim::bus::BusStats;
 use rtcan_sim::cpu::{CpuReport, CpuSummary};
 use rtcan_sim::metrics::{Meter, SrtStats, TopicInfo};
 use rtcan_sim::run::{window, Run, SimConfig};
@@ -43,7 +41,13 @@ pub struct RunInfo {
     pub cpi: f64,
 }
 
-/// SRT latency per label: first fragment's TXRQ → end of fragment 0.
+/// SRT latency per label: publication → end of the last fragment (fragment 0) on the
+/// wire, against the topic's deadline, as the simulator measures it. The publication
+/// instants come from the publisher's RAM (`publications`); the k-th transfer of a topic
+/// carries the oldest publication not yet matched that is not past its deadline at the
+/// first fragment's TXRQ (the engine sends a topic's messages in order and drops a
+/// message at its deadline: a publication passed over that way is a miss). A topic whose
+/// stamps were not located is measured from the first fragment's TXRQ (a lower bound).
 fn srt_stats(
     robot: &EmuRobot,
     topics: &[TopicInfo],
@@ -59,10 +63,22 @@ fn srt_stats(
             });
         }
     }
-    // Per topic, the TXRQ time of the transfer's first (highest) fragment.
-    let mut first: BTreeMap<usize, u64> = BTreeMap::new();
+    let pubs = robot.bus.publications.as_ref();
+    let watched = |t: &TopicInfo| {
+        pubs.and_then(|p| {
+            p.topics
+                .iter()
+                .find(|w| w.node == t.node && w.msg_id == t.msg_id)
+        })
+    };
+    let in_window = |at: Nanos, t: &TopicInfo| at >= win.from && at + t.deadline_ns < win.to;
+    // Per topic: the transfer's start (publication, or TXRQ) and the next publication
+    // not yet matched.
+    let mut first: BTreeMap<usize, Nanos> = BTreeMap::new();
+    let mut cursor: BTreeMap<usize, usize> = BTreeMap::new();
     let bit_ns = robot.bus.bit_ps / PS_NS;
-    for ((node, f, sof), (req, _)) in robot.bus.log.iter().zip(&robot.bus.meta) {
+    let ends = robot.bus.sim.wire.iter().filter(|w| w.ok);
+    for (((node, f, sof), (req, _)), w) in robot.bus.log.iter().zip(&robot.bus.meta).zip(ends) {
         let Some(frame) = raw_to_frame(f) else {
             continue;
         };
@@ -76,17 +92,54 @@ fn srt_stats(
         let Some(t) = srt.get(k) else { continue };
         let counter = counter_of(t.size, id.fragment());
         if counter + 1 == fragment_count(t.size) {
-            first.insert(k, *req);
+            let req_ns = req / PS_NS;
+            let start = match watched(t) {
+                Some(wt) => {
+                    let c = cursor.entry(k).or_insert(0);
+                    // Passed over: dropped by the engine at its deadline.
+                    while let Some(&p) = wt.published.get(*c) {
+                        if p + t.deadline_ns >= req_ns {
+                            break;
+                        }
+                        if in_window(p, t) {
+                            if let Some(s) = out.iter_mut().find(|s| s.name == t.label) {
+                                s.lost();
+                            }
+                        }
+                        *c += 1;
+                    }
+                    match wt.published.get(*c) {
+                        Some(&p) if p <= sof * bit_ns => {
+                            *c += 1;
+                            p
+                        }
+                        _ => req_ns,
+                    }
+                }
+                None => req_ns,
+            };
+            first.insert(k, start);
         }
         if counter == 0 {
             let Some(start) = first.remove(&k) else {
                 continue;
             };
-            let at = start / PS_NS;
-            let end = (sof + crate::bus::frame_bits(f).saturating_sub(3)) * bit_ns;
-            if at >= win.from && at + t.deadline_ns < win.to {
+            if in_window(start, t) {
                 if let Some(s) = out.iter_mut().find(|s| s.name == t.label) {
-                    s.delivered(end.saturating_sub(at), t.deadline_ns);
+                    s.delivered(w.end.saturating_sub(start), t.deadline_ns);
+                }
+            }
+        }
+    }
+    // Publications never sent whose deadline passed inside the run: misses.
+    let end = robot.bus.log.last().map_or(0, |(_, _, sof)| sof * bit_ns);
+    for (k, t) in srt.iter().enumerate() {
+        let Some(wt) = watched(t) else { continue };
+        let from = cursor.get(&k).copied().unwrap_or(0);
+        for &p in wt.published.iter().skip(from) {
+            if p + t.deadline_ns < end && in_window(p, t) {
+                if let Some(s) = out.iter_mut().find(|s| s.name == t.label) {
+                    s.lost();
                 }
             }
         }
@@ -225,9 +278,14 @@ pub fn triskar_run(
             reboots: 0,
             safe_exits: 0,
             safe_times: (None, None),
-            // Confinement state, FIFO overruns and guardians live in the images' RAM /
-            // the emulated bxCAN's registers, not read back here (see docs/EMULATOR.md).
-            error_state: rtcan_core::confinement::ErrorState::default(),
+            // The bus's fault confinement of this node (rtcan-sim's, which the bxCAN's ESR
+            // shows); FIFO overruns and guardians live in the images' RAM, not read back.
+            error_state: robot
+                .bus
+                .sim
+                .controller(i)
+                .map(|c| c.conf.state())
+                .unwrap_or_default(),
             fifo_overruns: 0,
             guardian_cut_at: None,
             // Sample age is measured by the emulator's own trace (tests/robot.rs), not
@@ -246,10 +304,8 @@ pub fn triskar_run(
             figures,
             overlaps,
             wire: Vec::new(),
-            bus: BusStats {
-                frames_ok: robot.bus.log.len() as u64,
-                ..BusStats::default()
-            },
+            // rtcan-sim's bus counted them (frames, error frames, contention, busy time).
+            bus: robot.bus.sim.stats,
             counters: modules.iter().map(|m| m.counters).collect(),
             rx_ok: 0,
             rx_bad: 0,

@@ -52,8 +52,9 @@ fn model(cost: Cost) -> rtcan_sim::triskar::TriskarRun {
     triskar::run(&plan(), &cfg).unwrap()
 }
 
+/// One emulated run compared three ways: slot latency, HRT jitter and SRT latency.
 #[test]
-fn slot_latency_and_jitter_agree_with_the_cpu_model() {
+fn slot_latency_jitter_and_srt_latency_agree_with_the_cpu_model() {
     // The emulated core at the model's CPI (wait states folded in, as the table's CPI).
     let timing = Timing {
         cpi: CPI,
@@ -65,6 +66,13 @@ fn slot_latency_and_jitter_agree_with_the_cpu_model() {
         .map(|n| Mcu::new(n, &image(n), timing).unwrap())
         .collect();
     let mut robot = EmuRobot::new(&plan(), mcus, 1.5, 1, HostScript::default()).unwrap();
+    let images: Vec<Vec<u8>> = MODULES.iter().map(|n| image(n)).collect();
+    let unstamped = robot.watch_publications(&plan(), &images);
+    eprintln!("SRT topics without located stamps: {unstamped:?}");
+    assert!(
+        !unstamped.iter().any(|u| u == "teleop"),
+        "teleop's stamps located"
+    );
     robot.run_until((SECONDS * 1e9) as u64).unwrap();
     let info = RunInfo {
         seconds: SECONDS,
@@ -118,4 +126,58 @@ fn slot_latency_and_jitter_agree_with_the_cpu_model() {
             assert!((e - s).abs() <= 10_000, "{}: jitter {e} vs {s}", r.module);
         }
     }
+    // SRT latency per topic, publication → end of the last fragment (docs/EMULATOR.md,
+    // "The report"): the emulated mean within SRT_TOLERANCE_NS of the model's, no miss,
+    // as many messages.
+    eprintln!("SRT latency (publication -> end of frame), emulation vs CPU model at CPI {CPI}");
+    eprintln!("topic                 n emu / model    mean emu / model [us]    max emu / model [us]   misses emu / model");
+    let model_srt = &mean.run.figures.srt;
+    let mut compared = 0;
+    for e in &emu.run.figures.srt {
+        let Some(s) = model_srt.iter().find(|s| s.name == e.name) else {
+            continue;
+        };
+        eprintln!(
+            "{:<18} {:>5} / {:<5}   {:>9.1} / {:<9.1}   {:>9.1} / {:<9.1}   {} / {}",
+            e.name,
+            e.count,
+            s.count,
+            e.mean_ns() / 1e3,
+            s.mean_ns() / 1e3,
+            e.latency.max as f64 / 1e3,
+            s.latency.max as f64 / 1e3,
+            e.misses,
+            s.misses
+        );
+        if e.count == 0 && s.count == 0 {
+            continue; // proximity_read's service topics: no calls in either
+        }
+        compared += 1;
+        assert_eq!(e.misses, 0, "{}: emulated SRT misses", e.name);
+        // Messages whose deadline falls in the window: ±1 at its edges.
+        assert!(
+            e.count.abs_diff(s.count) <= 1,
+            "{}: {} messages vs {}",
+            e.name,
+            e.count,
+            s.count
+        );
+        assert!(
+            (e.mean_ns() - s.mean_ns()).abs() <= SRT_TOLERANCE_NS,
+            "{}: SRT mean {} ns vs model {} ns",
+            e.name,
+            e.mean_ns(),
+            s.mean_ns()
+        );
+    }
+    // teleop and velocity carry traffic (proximity_read's service topics no calls).
+    assert!(compared >= 2, "teleop and velocity compared");
 }
+
+/// SRT latency tolerance, emulation against the CPU model (docs/EMULATOR.md): a
+/// message waits for the next free window of the TDMA cycle, and the emulated gateway
+/// publishes teleop at another phase of the cycle than the simulated one (after the host
+/// frame's ≈ 1.7 ms on the 115 200 Bd UART and the app's SysTick wake-up; the simulator's
+/// gateway has the command at once), so the wait differs by up to the gap between free
+/// windows. Measured: 0.40 ms emulated, 1.61 ms simulated (2 s at CPI 1.25).
+const SRT_TOLERANCE_NS: f64 = 2_000_000.0;

@@ -123,4 +123,20 @@ fn bad_arguments() {
     let (code, _, err) = emu(&["--images", "/nonexistent-dir"]);
     assert_eq!(code, 1);
     assert!(err.contains("/nonexistent-dir/gateway"), "{err}");
+    let (code, _, err) = emu(&["--ber", "1.5"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--ber must be in [0, 1), got 1.5"), "{err}");
+    // rtcan-sim's fault syntax; the faults the emulated MCU cannot model are refused
+    // before the run.
+    let (code, _, err) = emu(&["--fault", "motor9:stuck@1s"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no module `motor9`"), "{err}");
+    let (code, _, err) = emu(&["--fault", "motor1:stall=5ms@1s"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains(
+            "--fault `motor1:stall=5ms@1s`: fault Stall(5000000) is not modelled under emulation"
+        ),
+        "{err}"
+    );
 }

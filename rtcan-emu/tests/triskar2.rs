@@ -208,19 +208,55 @@ fn count_ms(bus: &Bus, id: u32, from: u64, to: u64) -> u64 {
     count_of(bus, id, from * MS / BIT, to * MS / BIT)
 }
 
+/// rtcan-sim's `stuck` fault on the emulated bus: motor1's transceiver holds the bus
+/// dominant for 100 µs while motor1 is sending. The simulator's fault confinement
+/// (`rtcan_sim::confinement`) puts the transmitter bus-off and every other controller
+/// error-passive; the emulated bxCANs show it (ESR, RM0008 §24.9.2) and the board code
+/// recovers: motor1 after 128 × 11 recessive bits (ABOM, §24.7.6), the others with
+/// their next good frames.
 #[test]
 fn bus_off_and_recovery() {
     let mut bus = robot();
     bus.run_until(300 * MS).unwrap();
     let mcr = bus.mcus[1].st.can.read(0).unwrap();
+    // Step until motor1's frame is on the wire.
+    let mut t = 300 * MS;
+    loop {
+        if let rtcan_sim::bus::Activity::Busy(w) = bus.sim.activity() {
+            if w.node == 1 {
+                break;
+            }
+        }
+        t += 2 * BIT;
+        bus.run_until(t).unwrap();
+        assert!(t < 310 * MS, "motor1 never sent");
+    }
     let bit = bus.bit();
-    // 32 transmit errors: TEC 256, bus-off (RM0008 §24.7.6).
-    bus.mcus[1].st.can.inject_tx_errors(32, bit);
-    assert!(bus.mcus[1].st.can.is_bus_off());
+    let at = bit * 1_000;
+    for (kind, when) in [
+        (rtcan_sim::fault::FaultKind::Stuck, at),
+        (rtcan_sim::fault::FaultKind::Release, at + 100_000),
+    ] {
+        bus.schedule(rtcan_sim::fault::Fault {
+            module: 1,
+            kind,
+            at: when,
+        })
+        .unwrap();
+    }
+    bus.run_until(t + 2 * BIT).unwrap();
+    // TEC past 255: bus-off; the others REC 255: error-passive (ESR.EPVF).
+    assert!(bus.mcus[1].st.can.is_bus_off(), "motor1 bus-off");
+    let esr = |bus: &mut Bus, i: usize| bus.mcus[i].st.can.read(0x018).unwrap();
+    assert_eq!(esr(&mut bus, 1) >> 2 & 1, 1, "motor1 ESR.BOFF");
+    for i in [0, 2, 3, 4, 5] {
+        assert_eq!(esr(&mut bus, i) >> 1 & 1, 1, "{}: ESR.EPVF", MODULES[i]);
+        assert_eq!(esr(&mut bus, i) >> 24, 255, "{}: REC", MODULES[i]);
+    }
     bus.run_until(600 * MS).unwrap();
-    // Silent until the automatic recovery after 128 x 11 recessive bits.
+    let released = bit + 100;
     assert_eq!(
-        count_of(&bus, ENCODER1, bit, bit + 128 * 11),
+        count_of(&bus, ENCODER1, bit, released + 128 * 11),
         0,
         "bus-off: motor1 silent"
     );
@@ -230,9 +266,11 @@ fn bus_off_and_recovery() {
         .find(|(_, f, s)| f.id == ENCODER1 && *s > bit)
         .map(|(_, _, s)| *s);
     let back = back.unwrap_or(u64::MAX);
-    eprintln!("bus-off at bit {bit}, encoder1 back at bit {back}");
+    let recovered = bus.sim.controller(1).unwrap().conf.bus_off_entries;
+    eprintln!("bus-off at bit {bit} (released at {released}), encoder1 back at bit {back}; bus-off entries {recovered}");
+    assert_eq!(recovered, 1);
     assert!(
-        back < bit + 128 * 11 + 3 * 10_000,
+        back < released + 128 * 11 + 3 * 10_000,
         "motor1 back within 3 cycles of its recovery: {back}"
     );
     assert!(count_ms(&bus, ENCODER3, 301, 310) >= 1, "the others go on");
@@ -245,12 +283,63 @@ fn bus_off_and_recovery() {
         !bus.mcus[1].st.can.is_bus_off(),
         "recovered after 128 x 11 recessive bits"
     );
+    // Error-active again everywhere: good frames brought REC back (127 → 119 and down).
+    for (i, name) in MODULES.iter().enumerate() {
+        assert_eq!(
+            esr(&mut bus, i) & 3,
+            0,
+            "{}: ESR {:#x}",
+            name,
+            esr(&mut bus, i)
+        );
+    }
     // Back at 200 Hz within three cycles of the recovery.
     assert!(
         count_ms(&bus, ENCODER1, 340, 600).abs_diff(52) <= 1,
         "encoder1 after recovery: {}",
         count_ms(&bus, ENCODER1, 340, 600)
     );
+}
+
+/// rtcan-sim's bit errors on the emulated bus: frames destroyed at a random bit, an
+/// error frame (6 + 8 bits), the transmitter retries (bxCAN automatic retransmission,
+/// RM0008 §24.7.3) and its TEC counts +8 / −1 (ISO 11898-1 §12); every HRT topic keeps
+/// its rate.
+#[test]
+fn bit_errors_retransmitted() {
+    let mut bus = robot();
+    bus.run_until(100 * MS).unwrap();
+    bus.sim.set_bit_error_rate(1e-4);
+    bus.run_until(1_100 * MS).unwrap();
+    no_unknown(&bus);
+    let errors = bus.sim.stats.error_frames;
+    let destroyed = bus.sim.wire.iter().filter(|w| !w.ok).count() as u64;
+    eprintln!(
+        "1 s at BER 1e-4: {} good frames, {errors} error frames; TEC {:?}",
+        bus.sim.stats.frames_ok,
+        bus.mcus.iter().map(|m| m.st.can.tec).collect::<Vec<_>>()
+    );
+    assert!(errors >= 5, "error frames: {errors}");
+    assert_eq!(destroyed, errors, "each error frame on the wire record");
+    // Every destroyed frame was sent again: the same identifier follows it.
+    for (k, w) in bus.sim.wire.iter().enumerate().filter(|(_, w)| !w.ok) {
+        assert!(
+            bus.sim.wire[k + 1..]
+                .iter()
+                .take(8)
+                .any(|v| v.ok && v.frame.id() == w.frame.id() && v.node == w.node),
+            "{:#x} retransmitted",
+            w.frame.id().raw()
+        );
+    }
+    for (id, hz) in [(ENCODER1, 200), (ENCODER3, 200), (PROXIMITY, 25)] {
+        let n = count_ms(&bus, id, 100, 1_100);
+        assert!(n.abs_diff(hz) <= 2, "{id:#x}: {n} in 1 s");
+    }
+    // Far from error-passive: a few +8 and many −1.
+    for m in &bus.mcus {
+        assert!(m.st.can.tec < 96, "{}: TEC {}", m.name, m.st.can.tec);
+    }
 }
 
 #[test]

@@ -49,6 +49,9 @@ use crate::controller::{Filter, SimController, RX_FIFO_DEPTH};
 use crate::cpu::{Cpu, CpuModel, Effect};
 use crate::rng::Rng;
 
+mod external;
+pub use external::{Activity, OnWire};
+
 /// Error flag plus error delimiter, in bits.
 pub const ERROR_FRAME_BITS: u32 = 6 + 8;
 

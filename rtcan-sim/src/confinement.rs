@@ -58,6 +58,15 @@ impl Confinement {
         self.bus_off
     }
 
+    /// Back to power-on values (error-active, TEC = REC = 0), keeping the bus-off count:
+    /// the controller was reset with its MCU.
+    pub fn reset(&mut self) {
+        *self = Confinement {
+            bus_off_entries: self.bus_off_entries,
+            ..Confinement::default()
+        };
+    }
+
     /// This controller's frame was destroyed by an error.
     pub fn tx_error(&mut self) {
         if self.bus_off {
