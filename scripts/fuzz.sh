@@ -32,7 +32,7 @@ if [ "${1:-}" = "--cmin" ]; then
     cp -n "target/new-corpus/$target"/* "corpus/$target/" 2>/dev/null || true
   fi
   # shellcheck disable=SC2086
-  nice -n 19 cargo +nightly fuzz cmin -s none "$target" -- $extra -timeout=10
+  nice -n "${FUZZ_NICE:-19}" cargo +nightly fuzz cmin -s none "$target" -- $extra -timeout=10
   rm -rf "target/new-corpus/$target"
   du -sh "corpus/$target"
   exit 0
