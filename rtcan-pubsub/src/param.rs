@@ -299,6 +299,7 @@ pub fn serve(
 
 /// A parameter request (8 bytes: op, pad, index u16 LE, value u32 LE).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Request {
     Get {
         index: u16,
@@ -354,6 +355,7 @@ impl Request {
 /// A parameter reply (8 bytes: status (0 ok, else `Refused`), count u8, index u16 LE,
 /// value u32 LE).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Reply {
     /// The (new) value; `count` is the module's number of parameters.
     Value {
