@@ -14,7 +14,9 @@
 //! priorities; its critical sections are a few dozen instructions (QEMU row
 //! `critical_section_slot`), the blocking of the slot timer.
 use heapless::spsc::Consumer;
-use rtcan_board_stm32f103::common::protocol::{DynController, Lock, SlotTimerHw};
+use rtcan_board_stm32f103::common::protocol::{
+    Alarm, AlarmSetting, DynController, Lock, SlotTimerHw,
+};
 use rtcan_board_stm32f103::common::{Protocol, RxEvent, Stamps, TxEvent};
 use rtcan_board_stm32f103::glue::Core;
 use rtcan_board_stm32f103::hal::gpio::Floating;
@@ -176,9 +178,16 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
         }
         let next_run = self.engine.next_wakeup().saturating_sub(self.lead_ns);
         if due < next_run {
-            // Outside the critical section: it may divide.
+            // Outside the critical sections: the conversion may divide, the 64-bit
+            // compare decision is made on a clock read (`AlarmSetting::new`).
             let ticks = SlotTimer::ticks_of(due);
-            slot.lock(|c| c.timer.arm_prepare(ticks));
+            let now_ticks = slot.lock(|c| c.timer.ticks());
+            let setting = AlarmSetting::new(ticks, now_ticks);
+            slot.lock(|c| c.timer.arm(Alarm::Prepare, setting));
+            // The counter may have passed `ticks` while the compare was written: raise it.
+            if slot.lock(|c| c.timer.ticks()) >= ticks {
+                slot.lock(|c| c.timer.rescue(Alarm::Prepare));
+            }
         }
     }
 }
