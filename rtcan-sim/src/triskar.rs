@@ -235,13 +235,7 @@ fn run_all(
     // A panicking earlier run leaves the lock poisoned; the statics are reset anyway.
     let _guard = LOCK.lock().unwrap_or_else(|p| p.into_inner());
     reset_all();
-    let result = simulate(
-        &sc,
-        cfg,
-        script,
-        params,
-        &crate::sample_age::tx_names(plan),
-    );
+    let result = simulate(&sc, cfg, script, params, &crate::sample_age::tx_names(plan));
     reset_all();
     result
 }
