@@ -41,5 +41,12 @@ if [ "${1:-}" = "--qemu" ] && ! command -v log2asc >/dev/null 2>&1; then
   fi
 fi
 if [ "${1:-}" = "--qemu" ] && ! python3 -c "import cantools" >/dev/null 2>&1; then
-  python3 -m pip install --quiet -r scripts/interop-requirements.txt
+  # Debian's python3 has no pip until python3-pip is installed, and refuses installs into
+  # the system interpreter (PEP 668) unless told; a pyenv/venv python3 takes the first form.
+  if ! python3 -m pip --version >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-pip >/dev/null
+  fi
+  python3 -m pip install --quiet -r scripts/interop-requirements.txt ||
+    python3 -m pip install --quiet --break-system-packages -r scripts/interop-requirements.txt
 fi
