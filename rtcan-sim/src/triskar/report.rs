@@ -339,12 +339,7 @@ pub fn path_plot(r: &TriskarRun) -> Result<crate::plot::Plot, String> {
                 .label("final footprint")
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, ct.stroke_width(1)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
+        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     })?;
     let mut csv = String::from("track,t_s,x_m,y_m\n");
