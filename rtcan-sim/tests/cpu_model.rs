@@ -28,11 +28,11 @@ fn find<'a>(rows: &'a [Row], scenario: &str, design: &str, cpi: f64) -> &'a Row 
 
 #[test]
 fn prioritised_design_keeps_hrt_and_single_priority_breaks_it() {
-    // Every path at its mean over CPI 1.0 ... 2.0; at its max (a stress bound: every
-    // activation the longest) at CPI 1.0 (from 1.25 on the paper master's protocol task
-    // falls behind and HRT frames find no free mailbox: docs/SIM.md).
+    // Every path at its mean, and at its max (a stress bound: every activation the
+    // longest), over CPI 1.0 ... 2.0 (the 20 s runs: `cpu_before_after`, which fails on
+    // any HRT miss, overlap after warm-up or overrun of the prioritised design).
     check(&[1.0, 2.0], Cost::Mean);
-    check(&[1.0], Cost::Max);
+    check(&[1.0, 2.0], Cost::Max);
 }
 
 fn check(cpis: &[f64], cost: Cost) {
