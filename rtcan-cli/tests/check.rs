@@ -5,25 +5,9 @@
     clippy::panic
 )]
 //! `rtcan check` exit codes and outputs on the reference robots.
-use std::path::PathBuf;
+mod common;
+use common::{root, rtcan};
 use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn rtcan(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
 
 #[test]
 fn admissible_robot_exits_0_with_plan() {

@@ -5,20 +5,8 @@
     clippy::indexing_slicing,
     clippy::panic
 )]
-use std::process::Command;
-
-fn rtcan(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
-        .args(args)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::rtcan;
 
 #[test]
 fn flash_motor1_with_the_default_test_image() {
@@ -126,34 +114,7 @@ type GatewayDone = std::thread::JoinHandle<(
 /// time; every module with its update port, the gateway relaying the host channels)
 /// until `stop`; the slave's path.
 fn gateway_on_pty(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> (String, GatewayDone) {
-    use std::os::fd::FromRawFd;
-    let (mut m, mut s) = (0, 0);
-    let mut name = [0 as libc::c_char; 128];
-    // SAFETY: out-pointers to locals; the buffer holds any /dev/pts/N.
-    let rc = unsafe {
-        libc::openpty(
-            &mut m,
-            &mut s,
-            name.as_mut_ptr(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    assert_eq!(rc, 0);
-    // SAFETY: m is open and ours.
-    unsafe {
-        let fl = libc::fcntl(m, libc::F_GETFL);
-        libc::fcntl(m, libc::F_SETFL, fl | libc::O_NONBLOCK);
-    }
-    // SAFETY: NUL-terminated by openpty.
-    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
-        .to_str()
-        .unwrap()
-        .to_string();
-    // Raw, no echo, before anyone talks on it (a pty starts cooked).
-    rtcan_host::serial::make_raw(s).unwrap();
-    // SAFETY: both fds are open; the Files own them from here on.
-    let (master, slave) = unsafe { (std::fs::File::from_raw_fd(m), std::fs::File::from_raw_fd(s)) };
+    let (master, slave, path) = rtcan_host::serial::open_pty().unwrap();
     let h = std::thread::spawn(move || {
         let _slave = slave;
         let plan = rtcan_model::Robot::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../robot.toml"))

@@ -6,25 +6,8 @@
 )]
 //! `rtcan monitor|echo|pub|record` (issue 13) on the simulated robot and on logs:
 //! real output, the refused values, usage errors (exit 2), unavailable buses (exit 1).
-use std::path::PathBuf;
-use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn rtcan(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
+mod common;
+use common::{root, rtcan};
 
 #[test]
 fn monitor_once_shows_every_module_topic_and_the_load() {
@@ -221,35 +204,7 @@ type GatewayDone = std::thread::JoinHandle<(triskar2_link::LinkStats, (f64, f64)
 /// A pty pair with the simulated robot's gateway on the master side (five times real
 /// time) until `stop`; the slave's path.
 fn gateway_on_pty(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> (String, GatewayDone) {
-    use std::os::fd::FromRawFd;
-    let (mut m, mut s) = (0, 0);
-    let mut name = [0 as libc::c_char; 128];
-    // SAFETY: out-pointers to locals; the buffer holds any /dev/pts/N.
-    let rc = unsafe {
-        libc::openpty(
-            &mut m,
-            &mut s,
-            name.as_mut_ptr(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    assert_eq!(rc, 0);
-    // SAFETY: m is open and ours.
-    unsafe {
-        let fl = libc::fcntl(m, libc::F_GETFL);
-        libc::fcntl(m, libc::F_SETFL, fl | libc::O_NONBLOCK);
-    }
-    // SAFETY: NUL-terminated by openpty.
-    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
-        .to_str()
-        .unwrap()
-        .to_string();
-    // A serial port is configured before anyone talks on it: raw, no echo (a pty
-    // starts cooked and would echo the gateway's frames back to it).
-    rtcan_host::serial::make_raw(s).unwrap();
-    // SAFETY: both fds are open; the Files own them from here on.
-    let (master, slave) = unsafe { (std::fs::File::from_raw_fd(m), std::fs::File::from_raw_fd(s)) };
+    let (master, slave, path) = rtcan_host::serial::open_pty().unwrap();
     let h = std::thread::spawn(move || {
         let _slave = slave;
         let plan = rtcan_model::Robot::load(root().join("robot.toml"))

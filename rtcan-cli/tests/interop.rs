@@ -8,25 +8,10 @@
 //! (cantools), the field layouts of `check --json`, candump logs at a real epoch
 //! (can-utils' `log2asc`). The exact formats are asserted here; where the tool itself is
 //! installed (`pip install cantools`, `apt-get install can-utils`) it reads them too.
+mod common;
+use common::rtcan;
 use std::path::PathBuf;
 use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn rtcan(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("rtcan-interop-{}-{name}", std::process::id()));

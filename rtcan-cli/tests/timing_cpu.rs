@@ -7,21 +7,8 @@
 //! Issue 10 on the command line: `check` rejects a guard the slot timer path does not
 //! fit (exit 1, `guard-too-short`); `sim` runs on the CPU model by default, reports it in
 //! JSON, and takes `--cpu off`, `--cpu-design`, `--cpi` (bad values exit 2).
-use std::path::PathBuf;
-use std::process::Command;
-
-fn rtcan(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_rtcan"))
-        .args(args)
-        .current_dir(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
+mod common;
+use common::rtcan;
 
 #[test]
 fn check_rejects_a_guard_shorter_than_the_timer_path() {

@@ -44,6 +44,44 @@ pub fn make_raw(fd: i32) -> Result<(), String> {
     Ok(())
 }
 
+/// A pseudo-terminal pair standing in for a serial cable (tests, and a simulated gateway
+/// a host tool can open as `--serial PATH`): the master side non-blocking, the slave
+/// side already raw (a pty starts cooked and would echo the gateway's frames back), and
+/// the slave's path. Keep the slave `File` open while the path is in use, so the master
+/// never reads EIO between two opens of the path.
+pub fn open_pty() -> Result<(File, File, String), String> {
+    use std::os::fd::FromRawFd;
+    let (mut m, mut s) = (0, 0);
+    let mut name = [0 as libc::c_char; 128];
+    // SAFETY: out-pointers to locals; the name buffer holds any /dev/pts/N.
+    let rc = unsafe {
+        libc::openpty(
+            &mut m,
+            &mut s,
+            name.as_mut_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    if rc != 0 {
+        return Err(format!("openpty: {}", std::io::Error::last_os_error()));
+    }
+    // SAFETY: both fds were just opened by openpty and are owned by these Files only.
+    let (master, slave) = unsafe { (File::from_raw_fd(m), File::from_raw_fd(s)) };
+    // SAFETY: the master fd is open (owned by `master`).
+    unsafe {
+        let fl = libc::fcntl(master.as_raw_fd(), libc::F_GETFL);
+        libc::fcntl(master.as_raw_fd(), libc::F_SETFL, fl | libc::O_NONBLOCK);
+    }
+    // SAFETY: openpty NUL-terminates the name within the buffer.
+    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
+        .to_str()
+        .map_err(|e| format!("pty name: {e}"))?
+        .to_string();
+    make_raw(slave.as_raw_fd())?;
+    Ok((master, slave, path))
+}
+
 /// A serial link to the gateway.
 pub struct SerialLink<P: Read + Write> {
     port: P,

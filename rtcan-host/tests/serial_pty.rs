@@ -10,9 +10,7 @@
     clippy::panic
 )]
 
-use std::fs::File;
 use std::io::Write;
-use std::os::fd::FromRawFd;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -32,42 +30,9 @@ fn plan() -> rtcan_model::Plan {
         .unwrap()
 }
 
-/// A pty pair: the master (non-blocking), the slave (kept open so the master never
-/// reads EIO while the host reopens it) and the slave's path.
-fn pty() -> (File, File, String) {
-    let (mut m, mut s) = (0, 0);
-    let mut name = [0 as libc::c_char; 128];
-    // SAFETY: out-pointers to locals; the name buffer is large enough for /dev/pts/N.
-    let rc = unsafe {
-        libc::openpty(
-            &mut m,
-            &mut s,
-            name.as_mut_ptr(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    assert_eq!(rc, 0, "openpty: {}", std::io::Error::last_os_error());
-    // SAFETY: m is an open fd this test owns.
-    unsafe {
-        let fl = libc::fcntl(m, libc::F_GETFL);
-        libc::fcntl(m, libc::F_SETFL, fl | libc::O_NONBLOCK);
-    }
-    // SAFETY: openpty NUL-terminates the name.
-    let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
-        .to_str()
-        .unwrap()
-        .to_string();
-    // A serial port is configured before anyone talks on it: raw, no echo (a pty
-    // starts cooked and would echo the gateway's frames back to it).
-    rtcan_host::serial::make_raw(s).unwrap();
-    // SAFETY: both fds are open and owned from here on by the Files.
-    unsafe { (File::from_raw_fd(m), File::from_raw_fd(s), path) }
-}
-
 #[test]
 fn host_drives_the_simulated_robot_over_a_lossy_pty_link() {
-    let (master, _slave, path) = pty();
+    let (master, _slave, path) = rtcan_host::serial::open_pty().unwrap();
     let stop = Arc::new(AtomicBool::new(false));
     let stop2 = stop.clone();
     let gateway = std::thread::spawn(move || {
