@@ -369,3 +369,58 @@ fn typed_handles_publish_and_subscribe_locally() {
     assert_eq!(motor_ctrl2::PRIORITY, 3);
     assert_eq!(odometry::NODE.name(), "odometry");
 }
+
+/// `<module>::params`: the declarations of robot.toml `[params]` in wire-index order, equal
+/// to the model's, and typed handles whose `get`/`set` read and range-check the live table
+/// (as a `set` over the bus does).
+#[test]
+fn params_are_generated_as_typed_handles_on_the_module_table() {
+    use rtcan::pubsub::param::{Refused, Value};
+    let p = plan("robot.toml");
+    for (mi, m) in p.modules.iter().enumerate() {
+        let decls: Vec<_> = p.params.iter().filter(|d| d.module == mi).collect();
+        let specs: &[rtcan::pubsub::param::ParamSpec] = match m.name.as_str() {
+            "motor1" => &robot::motor1::params::SPECS,
+            "proximity" => &robot::proximity::params::SPECS,
+            "gateway" => &robot::gateway::params::SPECS,
+            "motor2" => &robot::motor2::params::SPECS,
+            "motor3" => &robot::motor3::params::SPECS,
+            "psu" => &robot::psu::params::SPECS,
+            other => panic!("module {other} not in this test"),
+        };
+        assert_eq!(specs.len(), decls.len(), "{}", m.name);
+        for (s, d) in specs.iter().zip(&decls) {
+            assert_eq!(
+                (s.name, s.unit, s.persist),
+                (d.name.as_str(), d.unit.as_str(), d.persist)
+            );
+        }
+    }
+    use robot::motor1::params::{table, KI, KP};
+    assert_eq!(robot::motor1::params::COUNT, 2);
+    assert_eq!(robot::motor1::params::SPECS[0].name, "motor1.kp");
+    assert_eq!(robot::motor1::params::SPECS[0].min, Value::F32(0.0));
+    assert_eq!(robot::motor1::params::SPECS[0].max, Value::F32(1.0));
+    assert_eq!((KP.index(), KI.index()), (0, 1));
+    let mut t = table();
+    assert_eq!((KP.get(&t), KI.get(&t)), (0.04, 1.0));
+    assert_eq!(KP.set(&mut t, 0.8), Ok(0.8));
+    assert_eq!(KP.get(&t), 0.8);
+    assert_eq!(KP.set(&mut t, 1.5), Err(Refused::OutOfRange));
+    assert_eq!(KP.set(&mut t, f32::NAN), Err(Refused::BadValue));
+    assert_eq!(KP.get(&t), 0.8, "a refused value is never applied");
+    assert_eq!(t.refused, 2);
+    // The wire's set reaches the same value through the handle.
+    let req = rtcan::pubsub::param::Request::Set {
+        index: KI.index(),
+        bits: 2.5f32.to_bits(),
+    };
+    let _ = t.serve(&req.encode(), &mut |_, _| true);
+    assert_eq!(KI.get(&t), 2.5);
+    use robot::proximity::params::{LOG_EVERY, STOP_DISTANCE};
+    let mut t = robot::proximity::params::table();
+    assert_eq!((STOP_DISTANCE.get(&t), LOG_EVERY.get(&t)), (0.25, 10u32));
+    assert_eq!(LOG_EVERY.set(&mut t, 0), Err(Refused::OutOfRange));
+    assert_eq!(LOG_EVERY.set(&mut t, 1000), Ok(1000));
+    assert_eq!(robot::gateway::params::COUNT, 0);
+}

@@ -24,6 +24,7 @@ mod lit;
 mod message;
 mod module;
 mod names;
+mod params;
 pub mod scaffold;
 mod services;
 mod tables;

@@ -365,6 +365,8 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
         m.name
     );
 
+    let params = crate::params::params(plan, mi);
+
     quote! {
         #[doc = #doc]
         pub mod #name {
@@ -434,6 +436,8 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             }
 
             #services
+
+            #params
 
             /// Transmit topics in `TX` order, for `ModuleHost`.
             pub static TX_PORTS: [&dyn ::rtcan::pubsub::TxPort; #ntx] = [#(&topics::#tx_ports),*];

@@ -144,8 +144,8 @@ pub fn analyze_locked(file: &str, source: &str, lock: Option<(&str, &str)>) -> A
             if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
                 m.bridge = bridge_keys::validate(file, entries, m, &mut items);
             }
-            if let (Some(m), syntax::Kind::Table(entries)) = (&model, &root.kind) {
-                params::validate(entries, m, &mut items);
+            if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
+                m.params = params::validate(entries, m, &mut items);
             }
             if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
                 services::validate(entries, m, &mut items);

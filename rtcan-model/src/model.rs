@@ -336,6 +336,8 @@ pub struct Model {
     /// `[services]` (rtcan_model::services): their topics and types are appended after
     /// the declared ones.
     pub services: Vec<crate::services::Service>,
+    /// `[params]` (rtcan_model::params), in declaration order.
+    pub params: Vec<crate::params::ParamDecl>,
 }
 
 impl Model {

@@ -291,30 +291,16 @@ fn decl(p: &Entry, what: &str, items: &mut Vec<Diagnostic>) -> Option<ParamDecl>
     })
 }
 
-/// Parses and validates `source` and returns its parameters (for `rtcan param`).
+/// Parses and validates `source` and returns its plan and parameters (for `rtcan param`):
+/// the parameters are the plan's (`Plan::params`, read once by `analyze`).
 pub fn load(file: &str, source: &str) -> Result<(crate::Plan, Vec<ParamDecl>), Diagnostics> {
     let a = crate::analyze(file, source);
-    let (Some(model), Some(plan)) = (a.model, a.plan) else {
+    let (Some(_), Some(plan)) = (a.model, a.plan) else {
         return Err(a.diagnostics);
     };
     if !a.diagnostics.items.is_empty() {
         return Err(a.diagnostics);
     }
-    let mut items = Vec::new();
-    let params = match crate::syntax::parse(source) {
-        Ok(Node {
-            kind: Kind::Table(root),
-            ..
-        }) => validate(&root, &model, &mut items),
-        _ => Vec::new(),
-    };
-    if items.is_empty() {
-        Ok((plan, params))
-    } else {
-        Err(Diagnostics {
-            file: file.to_string(),
-            source: source.to_string(),
-            items,
-        })
-    }
+    let params = plan.params.clone();
+    Ok((plan, params))
 }

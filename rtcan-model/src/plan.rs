@@ -204,6 +204,8 @@ pub struct Plan {
     pub chains: Vec<crate::chains::ChainBound>,
     /// Request/reply services (`[services]`); their topics are in `topics`.
     pub services: Vec<crate::services::Service>,
+    /// `[params]`, from the model.
+    pub params: Vec<crate::params::ParamDecl>,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -729,6 +731,7 @@ pub fn build_locked(
         moves,
         chains: Vec::new(),
         services: model.services.clone(),
+        params: model.params.clone(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)

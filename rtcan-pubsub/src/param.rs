@@ -142,6 +142,106 @@ impl ParamSpec {
     }
 }
 
+/// A Rust type a parameter can have (`f32`, `i32`, `u32`, `bool`).
+pub trait ParamValue: Copy {
+    /// The value if `v` has this type.
+    fn of(v: Value) -> Option<Self>;
+    /// As a [`Value`].
+    fn value(self) -> Value;
+}
+
+impl ParamValue for f32 {
+    fn of(v: Value) -> Option<Self> {
+        match v {
+            Value::F32(x) => Some(x),
+            _ => None,
+        }
+    }
+    fn value(self) -> Value {
+        Value::F32(self)
+    }
+}
+
+impl ParamValue for i32 {
+    fn of(v: Value) -> Option<Self> {
+        match v {
+            Value::I32(x) => Some(x),
+            _ => None,
+        }
+    }
+    fn value(self) -> Value {
+        Value::I32(self)
+    }
+}
+
+impl ParamValue for u32 {
+    fn of(v: Value) -> Option<Self> {
+        match v {
+            Value::U32(x) => Some(x),
+            _ => None,
+        }
+    }
+    fn value(self) -> Value {
+        Value::U32(self)
+    }
+}
+
+impl ParamValue for bool {
+    fn of(v: Value) -> Option<Self> {
+        match v {
+            Value::Bool(x) => Some(x),
+            _ => None,
+        }
+    }
+    fn value(self) -> Value {
+        Value::Bool(self)
+    }
+}
+
+/// A typed handle on one declared parameter (generated per parameter as
+/// `<module>::params::<NAME>`): its wire index and its default. Node code reads the live
+/// value of its module's table with it, so a value set over the bus takes effect at the
+/// next read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Param<T> {
+    index: u16,
+    default: T,
+}
+
+impl<T: ParamValue> Param<T> {
+    /// The handle of parameter `index` (declaration order in its module).
+    pub const fn new(index: u16, default: T) -> Self {
+        Param { index, default }
+    }
+
+    /// The wire index.
+    pub const fn index(self) -> u16 {
+        self.index
+    }
+
+    /// The declared default.
+    pub const fn default_value(self) -> T {
+        self.default
+    }
+
+    /// The live value in `table`; the default if `table` has no parameter of this type at
+    /// this index (not with the generated table of the same module).
+    pub fn get<const N: usize>(self, table: &Params<N>) -> T {
+        table
+            .get(usize::from(self.index))
+            .and_then(T::of)
+            .unwrap_or(self.default)
+    }
+
+    /// Sets the value in `table` after the declared range check, as a `set` over the bus
+    /// does (a refused value changes nothing and is counted).
+    pub fn set<const N: usize>(self, table: &mut Params<N>, v: T) -> Result<T, Refused> {
+        table
+            .set(usize::from(self.index), v.value().bits())
+            .map(|_| v)
+    }
+}
+
 /// The live parameters of one module: `N` values in declaration order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params<const N: usize> {
