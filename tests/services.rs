@@ -19,6 +19,17 @@ use svc::sonar::services::ScanServer;
 
 const MS: u64 = 1_000_000;
 
+/// Runs `f` to completion on this thread (its waits are ready futures).
+fn block_on<F: std::future::Future>(f: F) -> F::Output {
+    let mut f = std::pin::pin!(f);
+    let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+    loop {
+        if let std::task::Poll::Ready(v) = f.as_mut().poll(&mut cx) {
+            return v;
+        }
+    }
+}
+
 /// The statics are per process: one test function runs the local service.
 #[test]
 fn local_service_calls_answers_times_out_and_refuses() {
@@ -77,6 +88,61 @@ fn local_service_calls_answers_times_out_and_refuses() {
     assert_eq!(client.poll(34 * MS), Some(Event::TimedOut(d)));
     assert!(client.server_absent(), "three timeouts in a row");
     assert_eq!(server.served, 3);
+
+    // The async call: answered by the server while the caller waits (the `wait` closure
+    // stands in for the other task running and the clock advancing 1 ms per wait).
+    let clock = std::cell::Cell::new(40 * MS);
+    let waits = std::cell::Cell::new(0u32);
+    let mut client = PlanStatusClient::new();
+    let mut server = PlanStatusServer::new();
+    let reply = block_on(client.call_async(
+        &svc::PlanStatusRequest {},
+        || clock.get(),
+        |until| {
+            assert_eq!(
+                until,
+                44 * MS,
+                "waits until the call's deadline at the latest"
+            );
+            waits.set(waits.get() + 1);
+            clock.set(clock.get() + MS);
+            if waits.get() == 2 {
+                server.serve(clock.get(), |_| svc::PlanStatusReply {
+                    busy: false,
+                    goals: 7,
+                });
+            }
+            std::future::ready(())
+        },
+    ));
+    assert_eq!(
+        reply,
+        Ok(svc::PlanStatusReply {
+            busy: false,
+            goals: 7
+        })
+    );
+    assert_eq!((waits.get(), clock.get()), (2, 42 * MS));
+    // No server: `TimedOut` exactly at call + 4 ms.
+    let reply = block_on(client.call_async(
+        &svc::PlanStatusRequest {},
+        || clock.get(),
+        |until| {
+            clock.set(until);
+            std::future::ready(())
+        },
+    ));
+    assert_eq!(reply, Err(CallError::TimedOut));
+    assert_eq!(clock.get(), 46 * MS);
+    // Another call in flight: refused, not stolen.
+    let other = client.call(50 * MS, &svc::PlanStatusRequest {}).unwrap();
+    let reply = block_on(client.call_async(
+        &svc::PlanStatusRequest {},
+        || 50 * MS,
+        |_| std::future::ready(()),
+    ));
+    assert_eq!(reply, Err(CallError::Busy));
+    assert_eq!(client.poll(54 * MS), Some(Event::TimedOut(other)));
     svc::reset();
 }
 

@@ -131,6 +131,39 @@ fn client(plan: &Plan, s: &Service, mi: usize) -> Option<TokenStream> {
                     .map(::rtcan::pubsub::service::Event::TimedOut)
             }
 
+            /// [`Self::call`], then waits for that call's reply: `Ok(reply)`, or
+            /// `Err(CallError::TimedOut)` once its timeout passed. `now` reads the local
+            /// clock; `wait(until)` is the caller's sleep until at most `until` (the
+            /// call's deadline), e.g. RTIC's `Mono::delay_until`, or a wait on the reply
+            /// topic raced against it: after each the client polls again. The call owns
+            /// the client while it waits: with another call in flight it returns `Busy`
+            /// rather than take that call's outcome.
+            pub async fn call_async<W: ::core::future::Future<Output = ()>>(
+                &mut self,
+                request: &super::super::#req_ty,
+                mut now: impl FnMut() -> ::rtcan::core::Nanos,
+                mut wait: impl FnMut(::rtcan::core::Nanos) -> W,
+            ) -> ::core::result::Result<super::super::#rep_ty, ::rtcan::pubsub::service::CallError> {
+                if self.inner.in_flight() > 0 {
+                    return ::core::result::Result::Err(::rtcan::pubsub::service::CallError::Busy);
+                }
+                let id = self.call(now(), request)?;
+                loop {
+                    let t = now();
+                    match self.poll(t) {
+                        ::core::option::Option::Some(::rtcan::pubsub::service::Event::Reply(got, reply)) if got == id => {
+                            return ::core::result::Result::Ok(reply);
+                        }
+                        ::core::option::Option::Some(::rtcan::pubsub::service::Event::TimedOut(got)) if got == id => {
+                            return ::core::result::Result::Err(::rtcan::pubsub::service::CallError::TimedOut);
+                        }
+                        // Only this call is in flight: nothing else can come out.
+                        _ => {}
+                    }
+                    wait(self.inner.next_deadline().unwrap_or(t)).await;
+                }
+            }
+
             /// Calls, replies, timeouts, late or unknown replies, refusals.
             pub fn counters(&self) -> ::rtcan::pubsub::service::ClientCounters {
                 self.inner.counters

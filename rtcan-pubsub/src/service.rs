@@ -24,6 +24,8 @@ pub enum CallError {
     TooLong,
     /// The request could not be queued for sending (the call was withdrawn).
     NotSent,
+    /// No reply before the call's timeout (the generated client's `call_async`).
+    TimedOut,
 }
 
 /// What a typed client's `poll` reports (the generated `<Service>Client`).
