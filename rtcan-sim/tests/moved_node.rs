@@ -4,10 +4,10 @@
 //!
 //! `cargo test` checks the workspace robot: `kinematics` on motor1.
 //! `scripts/moved-node-check.sh` builds this test again with
-//! `RTCAN_ROBOT=robots/triskar2-moved.toml` and `MOVED_NODE_KINEMATICS=motor2`: the same
-//! node code, composed into motor2's app by the generated apps, drives the robot to the
-//! wall and stops it short, every HRT topic on time, and `wheel_setpoints` now leaves
-//! motor2.
+//! `RTCAN_ROBOT=robots/triskar2-moved.toml` (kinematics on motor2, odometry on motor3)
+//! and `MOVED_NODE_KINEMATICS=motor2`: the same node code, composed into the new modules'
+//! apps by the generated apps, drives the robot to the wall and stops it short, every
+//! HRT topic on time, and `wheel_setpoints` now leaves motor2.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -51,8 +51,19 @@ fn the_kinematics_node_runs_where_robot_toml_places_it_and_the_robot_stops_short
         ..TriskarConfig::default()
     };
     let r = triskar::run(&plan, &cfg).unwrap();
-    for m in &r.modules {
+    for (mi, m) in r.modules.iter().enumerate() {
         eprintln!("{:10} {:?}", m.name, m.nodes);
+        // Every node's task runs on the module robot.toml places it on, and only there.
+        let mut placed: Vec<&str> = plan
+            .nodes
+            .iter()
+            .filter(|n| n.module == mi)
+            .map(|n| n.name.as_str())
+            .collect();
+        let mut ran = m.nodes.to_vec();
+        placed.sort_unstable();
+        ran.sort_unstable();
+        assert_eq!(ran, placed, "{}", m.name);
         let runs = m.nodes.contains(&"kinematics");
         assert_eq!(runs, m.name == expected, "{}: {:?}", m.name, m.nodes);
         // The module that runs kinematics sends `wheel_setpoints` (measured at
