@@ -96,7 +96,10 @@ fn kapeck_workspace_has_one_image_per_module_and_one_file_per_node() {
     ));
     assert!(pid.contains("if self.encoder_left.due(now, io::module::STATUS.grid()) && running {"));
     assert!(pid.contains("let running = run_node(&io::NODE, &io::module::STATUS);"));
-    assert!(!pid.contains("motor_left::"), "no module named: the node can move");
+    assert!(
+        !pid.contains("motor_left::"),
+        "no module named: the node can move"
+    );
     assert!(pid.contains("robot::Encoder::default()"));
     assert!(
         !pid.contains("sonar") && !pid.contains("encoder_right"),
