@@ -407,9 +407,7 @@ fn node_file(plan: &Plan, n: usize) -> String {
             t.name
         ));
     }
-    s.push_str(&format!(
-        "        let running = run_node(&io::NODE, &io::module::STATUS);\n"
-    ));
+    s.push_str("        let running = run_node(&io::NODE, &io::module::STATUS);\n");
     if pubs.is_empty() {
         s.push_str("        let _ = (running, now);\n        Nanos::MAX\n");
     } else {
