@@ -42,3 +42,5 @@ echo "== issue 15: firmware update over the simulated bus (28 KiB to motor1, rob
 cargo run -q -p rtcan-cli -- flash robot.toml --module motor1
 echo "== issue 14: two robots that are not Triskar2 scaffolded by rtcan new, every image built within budget, their nodes simulated (HRT misses 0)"
 bash scripts/scaffold-check.sh
+echo "== issue 14: moved-node test (kinematics on motor2, odometry on motor3: the same node code simulated, every image within budget)"
+bash scripts/moved-node-check.sh

@@ -130,7 +130,8 @@ const MODULE_NAMES: &[&str] = &[
     "std",
     "alloc",
     "rtcan_",
-    "nodes",
+    // `nodes` itself is reserved (the generated `nodes` placement module).
+    "nodes_",
     "pool",
     "tx",
     "rx",

@@ -87,15 +87,19 @@ fn kapeck_workspace_has_one_image_per_module_and_one_file_per_node() {
     // 250 us, so the 100 Hz HRT encoder is every 10 000 000 ns; the 10 Hz SRT request
     // 1 / rate).
     let pid = read(&d.join("nodes/src/pid_left.rs"));
-    assert!(pid.contains("use crate::robot::motor_left::nodes::pid_left as io;"));
+    assert!(pid.contains("use crate::robot::nodes::pid_left as io;"));
     assert!(pid.contains("io::encoder_left_pub().send(value, now)"));
     assert!(pid.contains("io::wheel_refs_sub().try_recv()"));
     // HRT: synchronous (lead before each slot, R2P §3.4.5), the period before sync.
     assert!(pid.contains(
         "encoder_left: rtcan::pubsub::SlotEvery::new(io::ENCODER_LEFT_SLOTS, 10000000),"
     ));
-    assert!(pid
-        .contains("if self.encoder_left.due(now, robot::motor_left::STATUS.grid()) && running {"));
+    assert!(pid.contains("if self.encoder_left.due(now, io::module::STATUS.grid()) && running {"));
+    assert!(pid.contains("let running = run_node(&io::NODE, &io::module::STATUS);"));
+    assert!(
+        !pid.contains("motor_left::"),
+        "no module named: the node can move"
+    );
     assert!(pid.contains("robot::Encoder::default()"));
     assert!(
         !pid.contains("sonar") && !pid.contains("encoder_right"),

@@ -8,7 +8,11 @@
 //! - `BUS`, `FINGERPRINT`, `MASTER_MASKS`, `MASTER`;
 //! - `link::NAME` numbers and `link::TOPICS` of the gateway's serial link;
 //! - `pub mod <module>` per module: tables, filters, engine sizes, topic statics, typed
-//!   handles per node and the `ModuleHost` glue.
+//!   handles per node and the `ModuleHost` glue;
+//! - `nodes::<node>`: each node's handles and module wherever robot.toml places it.
+//!
+//! [`apps`] lays out, for a node crate's build script, one app per module composed of
+//! the nodes robot.toml places there.
 #![cfg_attr(
     test,
     allow(
@@ -19,12 +23,14 @@
     )
 )]
 
+pub mod apps;
 mod link;
 mod lit;
 mod message;
 mod module;
 mod names;
 mod params;
+mod placement;
 pub mod scaffold;
 mod services;
 mod tables;
@@ -55,6 +61,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
     let topics = tables::topic_infos(plan);
     let bus = tables::bus(plan);
     let link = link::link(plan);
+    let placement = placement::placement(plan);
     let modules = plan
         .modules
         .iter()
@@ -67,6 +74,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
         #bus
         #link
         #(#modules)*
+        #placement
         /// Every module's statics back to power-on (`<module>::reset`).
         pub fn reset() {
             #(#module_names::reset();)*

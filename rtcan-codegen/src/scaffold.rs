@@ -323,11 +323,14 @@ fn node_file(plan: &Plan, n: usize) -> String {
         }
     };
     let mut s = format!(
-        "//! Node `{name}` on module `{module}` (priority {prio}): publishes {p}; subscribes {q}.\n\
+        "//! Node `{name}` (on module `{module}`, priority {prio}, when written): publishes {p};\n\
+         //! subscribes {q}.\n\
          //! Written once by `rtcan new`: this file is yours, re-running never overwrites it.\n\
          //! The default body publishes zero values at each topic's rate once the node runs\n\
-         //! and counts what it receives; replace it with the node's work.\n\
-         use crate::robot;\nuse crate::robot::{module}::nodes::{name} as io;\n\
+         //! and counts what it receives; replace it with the node's work. It reaches its\n\
+         //! topics and module through `robot::nodes::{name}` (`io`), which follows the node\n\
+         //! wherever robot.toml puts it: moving it to another module needs no edit here.\n\
+         use crate::robot;\nuse crate::robot::nodes::{name} as io;\n\
          use crate::support::{{run_node, {every}Nanos, Tally}};\n\n\
          /// Node `{name}`.\npub struct {ty} {{\n",
         name = node.name,
@@ -404,16 +407,14 @@ fn node_file(plan: &Plan, n: usize) -> String {
             t.name
         ));
     }
-    s.push_str(&format!(
-        "        let running = run_node(&io::NODE, &robot::{module}::STATUS);\n"
-    ));
+    s.push_str("        let running = run_node(&io::NODE, &io::module::STATUS);\n");
     if pubs.is_empty() {
         s.push_str("        let _ = (running, now);\n        Nanos::MAX\n");
     } else {
         s.push_str("        let mut next = Nanos::MAX;\n");
         for t in &pubs {
             let due = if sync(t) {
-                format!("due(now, robot::{module}::STATUS.grid())")
+                "due(now, io::module::STATUS.grid())".to_string()
             } else {
                 "due(now)".to_string()
             };
@@ -439,21 +440,23 @@ fn node_file(plan: &Plan, n: usize) -> String {
     s
 }
 
-/// Nodes of module `m`, highest priority first (file order among equals): the order the
-/// module app polls them in.
+/// Nodes of module `m` in the order the module app polls them: publishers before their
+/// local subscribers, else highest priority first (`apps::poll_order`, the rule of the
+/// generated Triskar2 apps too).
 fn module_nodes(plan: &Plan, m: usize) -> Vec<&rtcan_model::model::Node> {
-    let mut v: Vec<&rtcan_model::model::Node> =
-        plan.nodes.iter().filter(|n| n.module == m).collect();
-    v.sort_by_key(|n| core::cmp::Reverse(n.priority));
-    v
+    crate::apps::poll_order(plan, m)
+        .into_iter()
+        .filter_map(|n| plan.nodes.get(n))
+        .collect()
 }
 
 fn modules_rs(plan: &Plan) -> String {
     let mut s = format!(
         "// {GENERATED}.\n\
-         //! One app per module: it owns the module's nodes and polls them, highest priority\n\
-         //! first; the image's app task and the simulator call `poll` and sleep until the\n\
-         //! time it returns (or until a message is delivered).\n\
+         //! One app per module: it owns the module's nodes and polls them, publishers before\n\
+         //! their local subscribers, else highest priority first; the image's app task and\n\
+         //! the simulator call `poll` and sleep until the time it returns (or until a\n\
+         //! message is delivered).\n\
          use crate::support::Nanos;\n\n"
     );
     for (mi, m) in plan.modules.iter().enumerate() {
@@ -728,7 +731,7 @@ fn readme(plan: &Plan, images: &[&rtcan_model::ModulePlan]) -> String {
          | path | what |\n|---|---|\n\
          | `robot.toml` | the robot: modules, nodes, topics (`rtcan check robot.toml`) |\n\
          | `nodes/src/<node>.rs` | one file per node, typed handles for exactly its topics |\n\
-         | `nodes/src/modules.rs` | one app per module polling its nodes, highest priority first |\n\
+         | `nodes/src/modules.rs` | one app per module polling its nodes (publishers before local subscribers, else highest priority first) |\n\
          | `sim/` | the same nodes on the simulated bus |\n\
          | `firmware/` | one image per module (thumbv7m), probe-rs runner, size budgets |\n\n\
          ## Simulate\n\n```sh\ncargo run -p sim -- --seconds 2\n```\n\n\

@@ -265,6 +265,11 @@ pub fn triskar_run(
         });
         modules.push(ModuleReport {
             name,
+            // The images' apps are generated from the same placement.
+            nodes: triskar2_nodes::app::MODULE_NODES
+                .iter()
+                .find(|(module, _)| *module == name)
+                .map_or(&[][..], |(_, nodes)| nodes),
             counters,
             synced,
             safe_trips,

@@ -76,14 +76,15 @@ pub const KEYWORDS: &[&str] = &[
 /// Keywords that cannot be raw identifiers either.
 pub const NOT_RAW: &[&str] = &["self", "Self", "super", "crate", "_"];
 
-/// Names the generated code gives its own items next to the module modules (`topics`),
+/// Names the generated code gives its own items next to the module modules (`topics`,
+/// `link`, `nodes`),
 /// the crate the `rtcan::robot!` call next to them names (a module `rtcan` makes that
 /// path ambiguous: found by `tests/admitted_build.rs`), and the primitive types the
 /// message structs are written with: a module `u8` would shadow the type `u8` for every
 /// field in the generated code.
 pub const RESERVED_MODULE_NAMES: &[&str] = &[
-    "topics", "link", "rtcan", "bool", "char", "str", "u8", "u16", "u32", "u64", "u128", "usize",
-    "i8", "i16", "i32", "i64", "i128", "isize", "f16", "f32", "f64", "f128",
+    "topics", "link", "nodes", "rtcan", "bool", "char", "str", "u8", "u16", "u32", "u64", "u128",
+    "usize", "i8", "i16", "i32", "i64", "i128", "isize", "f16", "f32", "f64", "f128",
 ];
 
 /// True for a Rust keyword of any kind.

@@ -496,6 +496,7 @@ fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
             let what = match m.key.as_str() {
                 "topics" => "the generated module holding the topic constants",
                 "link" => "the generated module holding the serial link's topic numbers",
+                "nodes" => "the generated module placing every node on its module",
                 "rtcan" => "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
                 _ => "a primitive type the generated message structs use",
             };

@@ -142,6 +142,10 @@ fn modules_named_like_generated_items_or_primitives_are_refused() {
     for (name, what) in [
         ("topics", "the generated module holding the topic constants"),
         (
+            "nodes",
+            "the generated module placing every node on its module",
+        ),
+        (
             "rtcan",
             "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
         ),

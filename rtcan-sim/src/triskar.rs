@@ -84,6 +84,9 @@ impl Default for TriskarConfig {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ModuleReport {
     pub name: &'static str,
+    /// The nodes its app ran, in poll order: robot.toml's placement
+    /// (`triskar2_nodes::app::MODULE_NODES`, generated from it).
+    pub nodes: &'static [&'static str],
     pub counters: rtcan_core::counters::Counters,
     pub synced: bool,
     pub safe_trips: u32,
@@ -654,6 +657,10 @@ fn simulate(
             crate::sample_age::named(m.sample_ages(), tx_names.get(n).map_or(&[][..], |v| v));
         modules.push(ModuleReport {
             name: m.name(),
+            nodes: app::MODULE_NODES
+                .iter()
+                .find(|(module, _)| *module == m.name())
+                .map_or(&[][..], |(_, nodes)| nodes),
             counters: m.counters(),
             synced: m.synced(),
             safe_trips: m.safe_trips(),

@@ -12,10 +12,11 @@ use rtcan::core::{Engine, Frame, Nanos};
 use rtcan::pubsub::topic::TopicStats;
 use rtcan::pubsub::{ModuleHost, SystemStatus};
 use triskar2_nodes::app::{
-    GatewayApp, GatewayHw, Motor1App, Motor2App, Motor3App, MotorHw, ProximityApp, ProximityHw,
-    PsuApp, PsuHw,
+    GatewayApp, GatewayHw, Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw, ProximityApp,
+    ProximityHw, PsuApp, PsuHw,
 };
 use triskar2_nodes::kinematics::Twist;
+use triskar2_nodes::tasks::obstacle_avoid;
 
 use super::physics::Physics;
 use crate::bus::Module;
@@ -132,7 +133,8 @@ impl GatewayHw for PlantHw<'_> {
     }
 }
 
-/// A module's app, polled with plant-backed hardware.
+/// A module's app (generated from robot.toml's placement of the nodes), polled with
+/// plant-backed hardware; the variant is the module's board (which motor it drives).
 pub enum App {
     Gateway(GatewayApp),
     Motor1(Motor1App),
@@ -144,37 +146,48 @@ pub enum App {
 
 impl App {
     fn poll(&mut self, now: Nanos, hw: &mut PlantHw<'_>) -> Nanos {
-        match self {
+        let next = match self {
             App::Gateway(a) => a.poll(now, hw),
             App::Motor1(a) => a.poll(now, hw),
             App::Motor2(a) => a.poll(now, hw),
             App::Motor3(a) => a.poll(now, hw),
-            App::Proximity(a) => {
-                let next = a.poll(now, hw);
-                hw.shared.physics.velocity = a.last_velocity;
-                next
-            }
+            App::Proximity(a) => a.poll(now, hw),
             App::Psu(a) => a.poll(now, hw),
+        };
+        // The commanded velocity, from whichever module robot.toml runs the obstacle
+        // node on.
+        if let Some(t) = self.task::<obstacle_avoid::Task>() {
+            hw.shared.physics.velocity = t.last_velocity;
         }
+        next
+    }
+
+    /// The task of a node of type `T` on this module, wherever robot.toml placed it.
+    pub fn task<T: 'static>(&self) -> Option<&T> {
+        match self {
+            App::Gateway(a) => a.task(),
+            App::Motor1(a) => a.task(),
+            App::Motor2(a) => a.task(),
+            App::Motor3(a) => a.task(),
+            App::Proximity(a) => a.task(),
+            App::Psu(a) => a.task(),
+        }
+    }
+
+    /// Whether this module runs node `T` (e.g. `tasks::kinematics::Task`).
+    pub fn runs<T: 'static>(&self) -> bool {
+        self.task::<T>().is_some()
     }
 
     /// Measured wheel speed and whether the controller is in its safe state.
     pub fn motor(&self) -> Option<(f32, bool)> {
-        let c = match self {
-            App::Motor1(a) => &a.ctrl,
-            App::Motor2(a) => &a.ctrl,
-            App::Motor3(a) => &a.ctrl,
-            _ => return None,
-        };
-        Some((c.speed_rad_s(), c.is_safe()))
+        self.task::<MotorCtrl>()
+            .map(|c| (c.speed_rad_s(), c.is_safe()))
     }
 
     /// Velocity publications obstacle_avoid limited.
     pub fn overrides(&self) -> Option<u32> {
-        match self {
-            App::Proximity(a) => Some(a.overrides),
-            _ => None,
-        }
+        self.task::<obstacle_avoid::Task>().map(|t| t.overrides)
     }
 }
 

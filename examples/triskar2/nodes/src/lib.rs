@@ -39,6 +39,7 @@ pub mod odometry;
 pub mod pid;
 pub mod proximity;
 mod step_clock;
+pub mod tasks;
 pub mod trig;
 
 pub use battery::{BatteryConfig, BatteryNode, BatteryStatus};

@@ -70,7 +70,7 @@ fn motor3_follows_its_setpoint_and_stops_in_the_safe_state() {
     host.deliver(0, &setpoints([0.0, 0.0, 10.0]), 10 * MS);
     a.poll(10 * MS, &mut hw);
     assert_eq!(hw.duty, 0.0);
-    assert!(a.ctrl.is_safe());
+    assert!(a.motor_ctrl3.is_safe());
     host.event(Event::Synced);
     host.deliver(0, &setpoints([0.0, 0.0, 10.0]), 15 * MS);
     a.poll(15 * MS, &mut hw);
@@ -112,16 +112,20 @@ fn proximity_module_limits_the_teleop_command_near_a_wall() {
     // Far from the wall: the command passes unchanged.
     host.deliver(0, &teleop(0.3), 0);
     a.poll(0, &mut Wall(0.8));
-    assert_eq!(a.last_velocity.unwrap().vx, 0.3);
-    assert_eq!(a.limited_mask, 0);
+    assert_eq!(a.obstacle_avoid.last_velocity.unwrap().vx, 0.3);
+    assert_eq!(a.obstacle_avoid.limited_mask, 0);
     // At the stop distance (filtered over a few samples): forward motion is removed.
     for k in 1..=20u64 {
         host.deliver(0, &teleop(0.3), k * 40 * MS);
         a.poll(k * 40 * MS, &mut Wall(0.2));
     }
-    assert!(a.last_velocity.unwrap().vx < 0.001, "{:?}", a.last_velocity);
-    assert_eq!(a.limited_mask, 1);
-    assert!(a.overrides >= 1);
+    assert!(
+        a.obstacle_avoid.last_velocity.unwrap().vx < 0.001,
+        "{:?}",
+        a.obstacle_avoid.last_velocity
+    );
+    assert_eq!(a.obstacle_avoid.limited_mask, 1);
+    assert!(a.obstacle_avoid.overrides >= 1);
     // A stale command is not forwarded.
     let before = robot::proximity::topics::VELOCITY.stats().published;
     a.poll(2_000 * MS, &mut Wall(0.8));

@@ -1,26 +1,26 @@
-//! One struct per Triskar2 module: it owns the module's node objects and runs them on the
-//! module's generated topics (`rtcan::robot_toml::<module>`), with the hardware behind a
-//! small trait. The firmware images (HAL drivers) and `rtcan-sim` (plant models)
-//! implement the traits and call the same code.
+//! One app per Triskar2 module, generated from robot.toml (build.rs,
+//! `rtcan_codegen::apps`): `<Module>App` owns the tasks (`crate::tasks`) of exactly the
+//! nodes robot.toml places on that module and runs them on the module's generated
+//! topics, with the hardware behind the small traits re-exported here. The firmware
+//! images (HAL drivers) and `rtcan-sim` (plant models) implement the traits and call the
+//! same code. Moving a node in robot.toml moves its task; no node code changes.
 //!
 //! Every app has `poll(now, hw) -> Nanos`: it runs the periodic node steps that are due
-//! at `now` (rates as robot.toml declares them), drains the event-driven subscriptions,
-//! and returns the local time at which it next needs to run. A firmware image may
-//! instead call the per-node step functions from its own tasks.
+//! at `now` (rates as robot.toml declares them; HRT publishers `lead` before their slots),
+//! drains the event-driven subscriptions, and returns the local time at which it next
+//! needs to run; `task::<T>()` finds a node's task wherever it was placed.
 //!
 //! Lifecycle (R2P §3.4.2): a node starts (Init → Run) once the module's `STATUS` allows
 //! it (synchronised and the master heard) and stops when the safe state is required; it
 //! does not restart by itself. A stopped motor controller drives 0 duty.
 
-pub mod gateway;
-pub mod motor;
-pub mod proximity;
-pub mod psu;
+pub use crate::tasks::battery_monitor::{log_line, PsuHw, LOG_LOW, LOG_STATUS};
+pub use crate::tasks::ir_ranger::ProximityHw;
+pub use crate::tasks::motor_ctrl::{MotorCtrl, MotorHw, COUNTS_PER_WHEEL_REV};
+pub use crate::tasks::obstacle_avoid::TELEOP_TIMEOUT_NS;
+pub use crate::tasks::ros_bridge::GatewayHw;
 
-pub use gateway::{GatewayApp, GatewayHw};
-pub use motor::{Motor1App, Motor2App, Motor3App, MotorCtrl, MotorHw, COUNTS_PER_WHEEL_REV};
-pub use proximity::{ProximityApp, ProximityHw};
-pub use psu::{PsuApp, PsuHw};
+include!(concat!(env!("OUT_DIR"), "/apps.rs"));
 
 use crate::kinematics::Twist;
 use crate::Nanos;

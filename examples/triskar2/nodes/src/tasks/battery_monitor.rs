@@ -1,11 +1,12 @@
-//! The power-supply module: `battery_monitor` samples the pack at 10 Hz, publishes
-//! `battery` at 1 Hz and a `log` line at 2 Hz (both NRT).
+//! `battery_monitor`: samples the pack at 10 Hz, publishes `battery` at 1 Hz and a
+//! `log` line at 2 Hz (both NRT). It needs the pack's sensors of the module it runs on
+//! ([`PsuHw`]).
 use core::fmt::Write as _;
 
 use rtcan::robot_toml as msg;
-use rtcan::robot_toml::psu as module;
+use rtcan::robot_toml::nodes::battery_monitor as n;
 
-use super::{run_node, AppStats, Every, MS};
+use crate::app::{run_node, AppStats, Every, MS};
 use crate::battery::{BatteryConfig, BatteryNode, BatteryStatus};
 use crate::Nanos;
 
@@ -17,14 +18,11 @@ pub trait PsuHw {
     fn current_a(&mut self) -> f32;
 }
 
-/// Log codes of the `log` topic.
-pub const LOG_STATUS: u16 = 1;
-/// The battery is low.
-pub const LOG_LOW: u16 = 2;
+pub use PsuHw as Hw;
 
-/// The PSU module.
+/// The node's state.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PsuApp {
+pub struct Task {
     node: BatteryNode,
     sample: Every,
     battery: Every,
@@ -33,60 +31,56 @@ pub struct PsuApp {
     pub stats: AppStats,
 }
 
-impl Default for PsuApp {
-    fn default() -> Self {
-        Self::new()
+/// At power-on.
+pub const fn new() -> Task {
+    Task {
+        node: BatteryNode::new(BatteryConfig::TRISKAR2),
+        sample: Every::new(100 * MS),
+        battery: Every::new(1_000 * MS),
+        log: Every::new(500 * MS),
+        status: None,
+        stats: AppStats {
+            published: 0,
+            publish_errors: 0,
+        },
     }
 }
 
-impl PsuApp {
-    pub const fn new() -> Self {
-        Self {
-            node: BatteryNode::new(BatteryConfig::TRISKAR2),
-            sample: Every::new(100 * MS),
-            battery: Every::new(1_000 * MS),
-            log: Every::new(500 * MS),
-            status: None,
-            stats: AppStats {
-                published: 0,
-                publish_errors: 0,
-            },
-        }
-    }
-
+impl Task {
     /// Latest battery estimate.
     pub const fn status(&self) -> Option<BatteryStatus> {
         self.status
     }
-
-    /// Runs what is due; returns the next local time to run at.
-    pub fn poll(&mut self, now: Nanos, hw: &mut impl PsuHw) -> Nanos {
-        use module::nodes::battery_monitor as n;
-        let running = run_node(&n::NODE, &module::STATUS);
-        if self.sample.due(now) {
-            self.status = Some(self.node.step(now, hw.voltage_v(), hw.current_a()));
-        }
-        if let (true, Some(s)) = (self.battery.due(now), self.status) {
-            if running {
-                let b = msg::Battery {
-                    mv: s.mv(),
-                    ma: s.ma(),
-                    pct: s.pct(),
-                };
-                self.stats.count(n::battery_pub().send(b, now));
-            }
-        }
-        if let (true, Some(s)) = (self.log.due(now), self.status) {
-            if running {
-                self.stats.count(n::log_pub().send(log_line(&s), now));
-            }
-        }
-        self.sample
-            .next()
-            .min(self.battery.next())
-            .min(self.log.next())
-    }
 }
+
+/// Runs what is due; returns when the next step is.
+pub fn poll(t: &mut Task, now: Nanos, hw: &mut impl Hw) -> Nanos {
+    let running = run_node(&n::NODE, &n::module::STATUS);
+    if t.sample.due(now) {
+        t.status = Some(t.node.step(now, hw.voltage_v(), hw.current_a()));
+    }
+    if let (true, Some(s)) = (t.battery.due(now), t.status) {
+        if running {
+            let b = msg::Battery {
+                mv: s.mv(),
+                ma: s.ma(),
+                pct: s.pct(),
+            };
+            t.stats.count(n::battery_pub().send(b, now));
+        }
+    }
+    if let (true, Some(s)) = (t.log.due(now), t.status) {
+        if running {
+            t.stats.count(n::log_pub().send(log_line(&s), now));
+        }
+    }
+    t.sample.next().min(t.battery.next()).min(t.log.next())
+}
+
+/// Log codes of the `log` topic.
+pub const LOG_STATUS: u16 = 1;
+/// The battery is low.
+pub const LOG_LOW: u16 = 2;
 
 /// A `log` line describing the battery, e.g. `battery 24.61V 2.10A 91%`.
 pub fn log_line(s: &BatteryStatus) -> msg::LogLine {
