@@ -4,7 +4,7 @@
 //!
 //! `cargo test` checks the workspace robot: `kinematics` on motor1.
 //! `scripts/moved-node-check.sh` builds this test again with
-//! `RTCAN_ROBOT=robots/triskar2-moved.toml` (kinematics on motor2, odometry on motor3)
+//! `RTCAN_ROBOT=target/tmp/triskar2-moved.toml` (written by scripts/moved-node-check.sh from robot.toml) (kinematics on motor2, odometry on motor3)
 //! and `MOVED_NODE_KINEMATICS=motor2`: the same node code, composed into the new modules'
 //! apps by the generated apps, drives the robot to the wall and stops it short, every
 //! HRT topic on time, and `wheel_setpoints` now leaves motor2.
