@@ -6,6 +6,7 @@
 //! - one struct per message type, implementing `rtcan::pubsub::Message`;
 //! - `topics::NAME: rtcan::TopicInfo` for every topic;
 //! - `BUS`, `FINGERPRINT`, `MASTER_MASKS`, `MASTER`;
+//! - `supervision::RULES` (robot.toml `on_missing`) and the heartbeat period;
 //! - `link::NAME` numbers and `link::TOPICS` of the gateway's serial link;
 //! - `pub mod <module>` per module: tables, filters, engine sizes, topic statics, typed
 //!   handles per node and the `ModuleHost` glue.
@@ -26,6 +27,7 @@ mod module;
 mod names;
 pub mod scaffold;
 mod services;
+mod supervision;
 mod tables;
 
 use proc_macro2::TokenStream;
@@ -54,6 +56,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
     let topics = tables::topic_infos(plan);
     let bus = tables::bus(plan);
     let link = link::link(plan);
+    let supervision = supervision::supervision(plan);
     let modules = plan
         .modules
         .iter()
@@ -65,6 +68,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
         #topics
         #bus
         #link
+        #supervision
         #(#modules)*
         /// Every module's statics back to power-on (`<module>::reset`).
         pub fn reset() {

@@ -204,6 +204,8 @@ pub struct Plan {
     pub chains: Vec<crate::chains::ChainBound>,
     /// Request/reply services (`[services]`); their topics are in `topics`.
     pub services: Vec<crate::services::Service>,
+    /// `on_missing` rules and the heartbeat period (filled by `analyze`).
+    pub supervision: crate::supervision::Supervision,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -729,6 +731,7 @@ pub fn build_locked(
         moves,
         chains: Vec::new(),
         services: model.services.clone(),
+        supervision: Default::default(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)

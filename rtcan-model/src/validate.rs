@@ -29,7 +29,8 @@ const BUS_KEYS: &[&str] = &[
     "master",
     "backup_masters",
 ];
-const MODULE_KEYS: &[&str] = &["board", "filters"];
+// `on_missing` and `dependents` are read by `supervision`.
+const MODULE_KEYS: &[&str] = &["board", "filters", "on_missing", "dependents"];
 const NODE_KEYS: &[&str] = &["module", "priority"];
 const TOPIC_KEYS: &[&str] = &[
     "type",
@@ -495,6 +496,7 @@ fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
             let what = match m.key.as_str() {
                 "topics" => "the generated module holding the topic constants",
                 "link" => "the generated module holding the serial link's topic numbers",
+                "supervision" => "the generated module holding the supervision rules",
                 "rtcan" => "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
                 _ => "a primitive type the generated message structs use",
             };

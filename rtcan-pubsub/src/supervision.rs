@@ -17,8 +17,24 @@ use crate::status::SystemStatus;
 /// it may wait for a cycle with free bandwidth).
 pub const MISSING_SLACK_CYCLES: u16 = 2;
 
-/// Age (cycles since the last heartbeat) past which a module counts as missing.
+/// Age (cycles since the last heartbeat) past which a module counts as missing, with
+/// the engine's default heartbeat period.
 pub const MISSING_AFTER_CYCLES: u16 = HEARTBEAT_PERIOD_CYCLES as u16 + MISSING_SLACK_CYCLES;
+
+/// Lateness tolerated on a supervised robot (robot.toml `on_missing`, whose heartbeats
+/// come every `heartbeat_cycles`, 1 on the Triskar2): a heartbeat may slip by up to two
+/// cycles (NRT, sent after the module's queued frames, again after an error frame: at
+/// BER 1e-4 the simulated Triskar2 shows ages of 3 cycles, 1 in 400 samples; with 1 cycle
+/// of slack the motors stopped twice in 10 s for nothing).
+pub const SUPERVISED_SLACK_CYCLES: u16 = 2;
+
+/// Age past which a module of a supervised robot counts as missing (the generated
+/// `supervision::MISSING_AFTER_CYCLES`): with a heartbeat every cycle, 3, so a module is
+/// missing 3 cycle starts after the heartbeat it failed to send (3 to 4 cycles after its
+/// death, depending on where in the cycle it died).
+pub const fn missing_after(heartbeat_cycles: u8) -> u16 {
+    heartbeat_cycles as u16 + SUPERVISED_SLACK_CYCLES
+}
 
 /// What a missing module means (robot.toml `[modules.<m>] on_missing`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,6 +57,15 @@ pub struct ModuleRule {
     pub on_missing: OnMissing,
     /// Modules depending on it (bit m = module m), for `SafeDependents`.
     pub dependents: u64,
+}
+
+/// Whether `rule`, when its module is missing, puts module `me` in its safe state.
+pub fn applies(rule: &ModuleRule, me: u8) -> bool {
+    match rule.on_missing {
+        OnMissing::SafeAll => true,
+        OnMissing::SafeDependents => me < 64 && rule.dependents & (1u64 << me) != 0,
+        OnMissing::Warn => false,
+    }
 }
 
 /// One row of the module table.
@@ -117,13 +142,34 @@ fn sat16(v: u32) -> [u8; 2] {
 
 impl<const N: usize> ModuleTable<N> {
     /// Snapshot of `status` for modules `0..N`; `fingerprint` is the robot's (rows of
-    /// modules that announced another one carry theirs, `mismatch`).
+    /// modules that announced another one carry theirs, `mismatch`). Missing after
+    /// `MISSING_AFTER_CYCLES` (the default heartbeat period).
     pub fn snapshot(
         status: &SystemStatus,
         reporter: u8,
         fingerprint: u32,
         mismatch: Option<(u8, u32)>,
         health: EngineHealth,
+    ) -> Self {
+        Self::snapshot_after(
+            status,
+            reporter,
+            fingerprint,
+            mismatch,
+            health,
+            MISSING_AFTER_CYCLES,
+        )
+    }
+
+    /// As `snapshot`, a module being missing once its heartbeat is more than
+    /// `missing_after` cycles old (`missing_after(heartbeat period)`).
+    pub fn snapshot_after(
+        status: &SystemStatus,
+        reporter: u8,
+        fingerprint: u32,
+        mismatch: Option<(u8, u32)>,
+        health: EngineHealth,
+        missing_after: u16,
     ) -> Self {
         let mut rows = [ModuleRow::default(); N];
         for (i, row) in rows.iter_mut().enumerate() {
@@ -133,7 +179,7 @@ impl<const N: usize> ModuleTable<N> {
             *row = ModuleRow {
                 module,
                 // A module does not hear its own heartbeat: it is alive while it runs.
-                alive: own || age.is_some_and(|a| a <= MISSING_AFTER_CYCLES),
+                alive: own || !status.module_missing(module, missing_after),
                 heard: own || age.is_some(),
                 state: status.module_state(module).unwrap_or(0),
                 age: if own { 0 } else { age.unwrap_or(u16::MAX) },
@@ -163,15 +209,9 @@ impl<const N: usize> ModuleTable<N> {
     /// rule says all, or says its dependents and `me` is one.
     pub fn safe_required(&self, rules: &[ModuleRule], me: u8) -> bool {
         let missing = self.missing();
-        rules.iter().any(|r| {
-            r.module < 64
-                && missing & (1u64 << r.module) != 0
-                && match r.on_missing {
-                    OnMissing::SafeAll => true,
-                    OnMissing::SafeDependents => me < 64 && r.dependents & (1u64 << me) != 0,
-                    OnMissing::Warn => false,
-                }
-        })
+        rules
+            .iter()
+            .any(|r| r.module < 64 && missing & (1u64 << r.module) != 0 && applies(r, me))
     }
 
     /// Modules reported as warnings only (missing, rule `Warn`, or no rule).
@@ -315,6 +355,51 @@ mod tests {
     }
 
     #[test]
+    fn fast_heartbeat_missing_at_the_fourth_silent_cycle() {
+        let s = SystemStatus::new(CFG);
+        s.event(Event::Synced);
+        beat(&s, 1);
+        beat(&s, 2);
+        let after = missing_after(1);
+        assert_eq!(after, 3);
+        let t = || ModuleTable::<3>::snapshot_after(&s, 0, 1, None, EngineHealth::default(), after);
+        // Module 1 beats every cycle; 2 is silent: alive for 3 cycles, missing at the 4th.
+        for k in 1..=3 {
+            cycles(&s, 1);
+            beat(&s, 1);
+            assert_eq!(t().missing(), 0, "cycle {k}");
+        }
+        cycles(&s, 1);
+        beat(&s, 1);
+        assert_eq!(t().missing(), 1 << 2);
+        assert_eq!(t().rows[2].age, 4);
+    }
+
+    #[test]
+    fn everybody_silent_at_once_is_the_sync_not_the_modules() {
+        let s = SystemStatus::new(CFG);
+        s.event(Event::Synced);
+        (1..4).for_each(|m| beat(&s, m));
+        let after = missing_after(1);
+        let t = || ModuleTable::<4>::snapshot_after(&s, 0, 1, None, EngineHealth::default(), after);
+        // Nobody beats for 5 cycles (a sync outage): nobody missing.
+        cycles(&s, 5);
+        assert_eq!(t().missing(), 0);
+        // Module 1 is heard again: 2 and 3, still silent, are missing now.
+        beat(&s, 1);
+        assert_eq!(t().missing(), 0b1100);
+        // With a single other module heard, its age alone decides.
+        let pair = SystemStatus::new(CFG);
+        beat(&pair, 1);
+        cycles(&pair, 3);
+        let two =
+            || ModuleTable::<2>::snapshot_after(&pair, 0, 1, None, EngineHealth::default(), after);
+        assert_eq!(two().missing(), 0);
+        cycles(&pair, 1);
+        assert_eq!(two().missing(), 0b10);
+    }
+
+    #[test]
     fn never_heard_module_is_missing_and_own_row_is_alive() {
         let s = SystemStatus::new(CFG);
         let t = ModuleTable::<3>::snapshot(&s, 0, 1, None, EngineHealth::default());
@@ -440,6 +525,67 @@ mod tests {
         cycles(&plain, 31);
         beat(&plain, 1);
         assert_eq!(plain.safe_reason(), Some(SafeReason::MasterSilent));
+    }
+
+    #[test]
+    fn status_applies_the_rules_of_missing_modules() {
+        use crate::status::Supervised;
+        // Module 2 of 4: module 1 is safe_dependents with 2 dependent, 3 is warn.
+        const RULES: &[ModuleRule] = &[
+            ModuleRule {
+                module: 1,
+                on_missing: OnMissing::SafeDependents,
+                dependents: 1 << 2,
+            },
+            ModuleRule {
+                module: 3,
+                on_missing: OnMissing::Warn,
+                dependents: 0,
+            },
+        ];
+        let sv = Supervised {
+            modules: 4,
+            missing_after: missing_after(1),
+            rules: RULES,
+        };
+        let me = |module| SafetyConfig {
+            module,
+            master: 0,
+            max_missed_cycles: 30,
+        };
+        let s = SystemStatus::supervised(me(2), &[], sv);
+        let other = SystemStatus::supervised(me(3), &[], sv);
+        let all = |f: &dyn Fn(&SystemStatus)| {
+            f(&s);
+            f(&other)
+        };
+        all(&|s| s.event(Event::Synced));
+        all(&|s| (0..4).for_each(|m| beat(s, m)));
+        assert_eq!(s.safe_reason(), None);
+        // 1 and 3 fall silent; 0 keeps beating every cycle.
+        for _ in 0..3 {
+            all(&|s| cycles(s, 1));
+            all(&|s| beat(s, 0));
+            assert_eq!(s.safe_reason(), None);
+        }
+        all(&|s| cycles(s, 1));
+        all(&|s| beat(s, 0));
+        assert_eq!(
+            s.safe_reason(),
+            Some(SafeReason::ModuleMissing { module: 1 })
+        );
+        // Module 3 is not a dependent of 1, and 3's own rule only warns.
+        assert_eq!(other.safe_reason(), None);
+        // Back: the rule no longer applies.
+        beat(&s, 1);
+        assert_eq!(s.safe_reason(), None);
+        // Without supervision, the same silence changes nothing.
+        let plain = SystemStatus::new(me(2));
+        plain.event(Event::Synced);
+        beat(&plain, 0);
+        cycles(&plain, 5);
+        beat(&plain, 0);
+        assert_eq!(plain.safe_reason(), None);
     }
 
     #[test]

@@ -140,7 +140,13 @@ fn master_silent_puts_the_motor_modules_in_safe_state() {
     use rtcan::pubsub::SafeReason;
     for m in r.modules.iter().filter(|m| m.name != "gateway") {
         assert_eq!(m.sync_master, 1, "{m:?}");
-        let expected = (m.name != "motor1").then_some(SafeReason::MasterStopped);
+        // motor1, now master, applies robot.toml's rule for the dead gateway
+        // (`on_missing = "safe_all"`, issue 15) and announces its stopped nodes.
+        let expected = if m.name == "motor1" {
+            Some(SafeReason::ModuleMissing { module: 0 })
+        } else {
+            Some(SafeReason::MasterStopped)
+        };
         assert_eq!(m.safe_reason, expected, "{m:?}");
     }
     let last = r.path.last().unwrap();
@@ -201,63 +207,6 @@ fn srt_figures_under_bit_errors_follow_the_messages_not_their_rank() {
         );
         // Delivered messages keep their bus latency: a few ms, far from a shifted pairing.
         assert!(c.max_ns() < 10_000_000, "{}: {}", c.name, c.max_ns());
-    }
-}
-
-/// Supervision (issue 15): the sync master times every module's heartbeat; its module
-/// table (through the topic's wire form) shows a killed module at most
-/// `MISSING_SLACK_CYCLES + 1` = 3 cycles after the heartbeat the module failed to send
-/// was due, and never before it died.
-#[test]
-fn module_table_shows_a_killed_module_within_3_cycles_of_its_missed_heartbeat() {
-    use rtcan::pubsub::supervision::{MISSING_AFTER_CYCLES, MISSING_SLACK_CYCLES};
-    let die_s = 2.0;
-    for (victim, seed) in [(5usize, 4u64), (2, 5)] {
-        let cfg = TriskarConfig {
-            sim: SimConfig {
-                seconds: 2.6,
-                seed,
-                ..SimConfig::default()
-            },
-            module_dies_at: Some((victim, die_s)),
-            ..TriskarConfig::default()
-        };
-        let r = triskar::run(&plan(), &cfg).unwrap();
-        let cycle = 10_000_000u64;
-        let die = (die_s * 1e9) as u64;
-        assert!(!r.supervision.is_empty());
-        // After warm-up (1 s) and before the death, every module is alive on the table.
-        for s in r
-            .supervision
-            .iter()
-            .filter(|s| s.t_ns > 1_000_000_000 && s.t_ns <= die)
-        {
-            assert_eq!(s.table.missing(), 0, "at {} ns: {:?}", s.t_ns, s.table);
-            assert_eq!(s.table.reporter, 0, "the gateway is the sync master");
-        }
-        let first = r
-            .supervision
-            .iter()
-            .find(|s| s.t_ns > 1_000_000_000 && s.table.missing() & (1 << victim) != 0)
-            .unwrap_or_else(|| panic!("module {victim} never shown missing"));
-        assert_eq!(first.table.missing(), 1 << victim, "only the victim");
-        // Its last heartbeat was at most one period before the death; the next one was
-        // due at most a period after it: shown missing within 3 cycles of that.
-        let row = first.table.rows[victim];
-        assert!(!row.alive && row.heard);
-        assert_eq!(row.age, MISSING_AFTER_CYCLES + 1);
-        let period = u64::from(rtcan::core::heartbeat::HEARTBEAT_PERIOD_CYCLES);
-        let latest = die + (period + u64::from(MISSING_SLACK_CYCLES) + 1) * cycle + cycle;
-        eprintln!(
-            "module {victim}: died at {die}, shown missing at {} ({:.1} cycles)",
-            first.t_ns,
-            (first.t_ns - die) as f64 / cycle as f64
-        );
-        assert!(first.t_ns > die && first.t_ns <= latest, "{}", first.t_ns);
-        // And it stays missing to the end.
-        for s in r.supervision.iter().filter(|s| s.t_ns >= first.t_ns) {
-            assert_ne!(s.table.missing() & (1 << victim), 0);
-        }
     }
 }
 
