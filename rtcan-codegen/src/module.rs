@@ -334,6 +334,7 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
     let queue = lit::usize(queue);
     let (banks, flat, bank_docs) = filters(m, plan);
     let services = crate::services::module_services(plan, mi);
+    let module_state = crate::supervision::module_glue(plan, mi);
     let banks_doc = format!(
         "bxCAN filter banks (32-bit scale, 29-bit identifiers), in bank order: the sync frame, heartbeats and exactly this module's subscriptions.\n{bank_docs}"
     );
@@ -455,6 +456,8 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             }
 
             #services
+
+            #module_state
 
             /// Transmit topics in `TX` order, for `ModuleHost`.
             pub static TX_PORTS: [&dyn ::rtcan::pubsub::TxPort; #ntx] = [#(&topics::#tx_ports),*];

@@ -24,6 +24,7 @@ pub mod fingerprint;
 pub mod ids;
 pub mod lock;
 pub mod model;
+pub mod module_state;
 pub mod names;
 pub mod params;
 pub mod plan;
@@ -150,6 +151,8 @@ pub fn analyze_locked(file: &str, source: &str, lock: Option<(&str, &str)>) -> A
             }
             if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
                 services::validate(entries, m, &mut items);
+                // After the services: their topics keep their IDs.
+                m.module_state = module_state::append(entries, m, &mut items);
             }
             if let Some(m) = &model {
                 plan = plan::build_locked(m, file, lock.as_ref(), &mut items);

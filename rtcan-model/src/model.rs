@@ -336,6 +336,9 @@ pub struct Model {
     /// `[services]` (rtcan_model::services): their topics and types are appended after
     /// the declared ones.
     pub services: Vec<crate::services::Service>,
+    /// A supervised robot's module-state topics (rtcan_model::module_state), appended
+    /// after the services' ones.
+    pub module_state: Option<crate::module_state::StateTopics>,
 }
 
 impl Model {
@@ -344,6 +347,12 @@ impl Model {
         self.services
             .iter()
             .any(|s| s.request_topic == topic || s.reply_topic == topic)
+    }
+    /// True for a module-state topic (health or table) of a supervised robot.
+    pub fn is_module_state_topic(&self, topic: usize) -> bool {
+        self.module_state
+            .as_ref()
+            .is_some_and(|s| s.contains(topic))
     }
     /// Payload size of a topic.
     pub fn topic_size(&self, topic: &Topic) -> usize {

@@ -204,6 +204,8 @@ pub struct Plan {
     pub chains: Vec<crate::chains::ChainBound>,
     /// Request/reply services (`[services]`); their topics are in `topics`.
     pub services: Vec<crate::services::Service>,
+    /// A supervised robot's module-state topics (`module_state`); they are in `topics`.
+    pub module_state: Option<crate::module_state::StateTopics>,
     /// `on_missing` rules and the heartbeat period (filled by `analyze`).
     pub supervision: crate::supervision::Supervision,
 }
@@ -731,6 +733,7 @@ pub fn build_locked(
         moves,
         chains: Vec::new(),
         services: model.services.clone(),
+        module_state: model.module_state.clone(),
         supervision: Default::default(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);

@@ -94,9 +94,13 @@ fn err(code: Code, n: &Node, msg: String, help: &str) -> Diagnostic {
 
 /// Modules that subscribe to a topic published on module `m` (other than `m`), sorted.
 pub fn subscribers_of(model: &Model, m: usize) -> Vec<usize> {
+    // The module-state topics go to the sync-capable modules whatever the rules say.
     let mut out: Vec<usize> = model
         .topics
         .iter()
+        .enumerate()
+        .filter(|(i, _)| !model.is_module_state_topic(*i))
+        .map(|(_, t)| t)
         .filter(|t| model.node_module(t.publisher) == m)
         .flat_map(|t| t.subscribers.iter().map(|s| model.node_module(s.node)))
         .filter(|&d| d != m)

@@ -429,6 +429,7 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
         topics,
         bridge: crate::bridge_keys::BridgeDecl::default(),
         services: Vec::new(),
+        module_state: None,
     })
 }
 

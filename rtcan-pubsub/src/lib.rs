@@ -39,5 +39,7 @@ pub use publisher::{AllocWait, PoolExhausted, PublishWait, Publisher, SendError,
 pub use slot_grid::{HrtSlots, SlotEvery, SlotGrid};
 pub use status::{SafeReason, SafetyConfig, Supervised, SystemStatus};
 pub use subscriber::{Recv, Subscriber};
-pub use supervision::{EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing};
+pub use supervision::{
+    EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing, Publish, Supervisor,
+};
 pub use topic::{pool_blocks, RecvError, Remote, Topic, TopicStats};

@@ -61,6 +61,8 @@ struct StatusState {
     sync_losses: u32,
     /// The slot grid on the local clock while synchronised (synchronous HRT publishers).
     grid: Option<SlotGrid>,
+    /// Cycles started since power-on (wrapping): the module-state publications' clock.
+    cycles: u32,
 }
 
 const POWER_ON: StatusState = StatusState {
@@ -74,10 +76,12 @@ const POWER_ON: StatusState = StatusState {
     ages: [0; 64],
     sync_losses: 0,
     grid: None,
+    cycles: 0,
 };
 
 /// One cycle passed: every heartbeat (the master's included) is a cycle older.
 fn age(st: &mut StatusState) {
+    st.cycles = st.cycles.wrapping_add(1);
     st.master_age = st.master_age.saturating_add(1);
     for a in st.ages.iter_mut() {
         *a = a.saturating_add(1);
@@ -337,6 +341,11 @@ impl SystemStatus {
                 None
             }
         })
+    }
+
+    /// Cycles started since power-on (`Event::CycleStart`, wrapping).
+    pub fn cycles(&self) -> u32 {
+        self.with(|st| st.cycles)
     }
 
     /// Times sync was lost.

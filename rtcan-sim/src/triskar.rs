@@ -27,6 +27,7 @@ use crate::slots::overlaps;
 use rtcan::pubsub::supervision::{table_bytes, ModuleTable};
 
 pub mod module;
+pub mod module_state;
 pub mod physics;
 pub mod report;
 pub mod services;
@@ -144,6 +145,9 @@ pub struct TriskarRun {
     /// With `module_dies_at` or `supervise`: the module table of the current sync master
     /// every 1/20 cycle, through its wire form (`ModuleTable::encode`/`decode`).
     pub supervision: Vec<SupervisionSample>,
+    /// With `module_dies_at` or `supervise`: the module-state topics' publications and
+    /// every table a module received over the bus (`module_state.rs`).
+    pub module_state: module_state::StateLog,
     /// With `update`: every target's result, in order, and what each module would boot
     /// at the end (slot, image length, CRC-32), by bus index.
     pub update: Vec<crate::update::UpdateResult>,
@@ -306,7 +310,7 @@ fn supervise(bus: &Bus<Box<dyn TriskarModule>>, t: Nanos) -> Option<SupervisionS
         reporter,
         robot::FINGERPRINT,
         None,
-        m.health(),
+        &m.known_health()?,
         robot::supervision::MISSING_AFTER_CYCLES,
     );
     let mut wire = [0u8; table_bytes(MODULES.len())];
@@ -378,6 +382,10 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
             .map(|j| crate::update::UpdateBus::new(j, MODULES.len(), robot::FINGERPRINT)),
         params: None,
         services: services::ServiceLog::default(),
+        module_state: module_state::StateLog {
+            record: cfg.supervise || cfg.module_dies_at.is_some(),
+            ..Default::default()
+        },
     }))
 }
 
@@ -452,6 +460,7 @@ pub(crate) fn build_bus(
                     4 => Some(Box::new(services::Server::default())),
                     _ => None,
                 };
+                m.state_io = Some(module_state::StateIo::for_module(n));
                 Box::new(m)
             }};
         }
@@ -723,6 +732,7 @@ fn simulate(
         ),
         modules,
         supervision,
+        module_state: std::mem::take(&mut sh.module_state),
         update: sh.update.as_ref().map(|u| u.results()).unwrap_or_default(),
         booted: (0..MODULES.len())
             .map(|m| sh.update.as_ref().and_then(|u| u.booted(m)))

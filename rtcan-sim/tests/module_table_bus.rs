@@ -1,0 +1,271 @@
+//! The module table as a topic on the simulated Triskar2 (issue 15, docs/SERVICES.md §1):
+//! the current sync master publishes `module_state_<itself>`, every module its
+//! `health_<itself>`; the tables checked here are the ones *other modules received over
+//! the bus*, decoded by their generated subscriptions.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+
+use rtcan::robot_toml as robot;
+use rtcan_sim::run::SimConfig;
+use rtcan_sim::triskar::{self, TriskarConfig, TriskarRun};
+
+const CYCLE_NS: u64 = 10_000_000;
+const WARM_UP_NS: u64 = 1_000_000_000;
+
+fn plan() -> rtcan_model::Plan {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robot.toml");
+    rtcan_model::Robot::load(&path).unwrap_or_else(|d| panic!("{}", d.render()))
+}
+
+fn run(cfg: TriskarConfig) -> TriskarRun {
+    triskar::run(&plan(), &cfg).unwrap()
+}
+
+#[test]
+fn the_plan_appends_the_module_state_topics_after_every_declared_one() {
+    let p = plan();
+    let s = p.module_state.as_ref().unwrap();
+    let name = |t: usize| p.topics[t].name.as_str();
+    let health: Vec<&str> = s.health.iter().map(|&(_, t)| name(t)).collect();
+    assert_eq!(
+        health,
+        [
+            "health_gateway",
+            "health_motor1",
+            "health_motor2",
+            "health_motor3",
+            "health_proximity",
+            "health_psu"
+        ]
+    );
+    let tables: Vec<&str> = s.tables.iter().map(|&(_, t)| name(t)).collect();
+    assert_eq!(tables, ["module_state_gateway", "module_state_motor1"]);
+    // Numbered after every declared and service topic: none of those moved.
+    let last_other = (0..p.topics.len())
+        .filter(|t| !s.contains(*t))
+        .map(|t| p.topics[t].msg_id.0)
+        .max()
+        .unwrap();
+    for &(_, t) in s.health.iter().chain(&s.tables) {
+        assert!(p.topics[t].msg_id.0 > last_other, "{}", name(t));
+        assert_eq!(p.topics[t].class, rtcan_core::Class::Nrt);
+    }
+    // 2 + 15 bytes per module: 92 bytes, 12 frames.
+    assert_eq!(p.topics[s.tables[0].1].size, 92);
+    assert_eq!(robot::supervision::PUBLISH_CYCLES, 10);
+}
+
+/// The tables the host reads off the wire after `from` (as `rtcan echo module_state`
+/// does: the plan's catalog decodes the frames), with the end of their last frame.
+fn host_tables(r: &TriskarRun, from: u64) -> Vec<(u64, robot::supervision::Table)> {
+    let p = plan();
+    let cat = rtcan_sim::decode::plan_catalog(&p);
+    let s = p.module_state.as_ref().unwrap();
+    let family: Vec<&str> = s
+        .tables
+        .iter()
+        .map(|&(_, t)| p.topics[t].name.as_str())
+        .collect();
+    let mut dec = rtcan_sim::decode::Decoder::new(&cat);
+    let mut out = Vec::new();
+    for w in r.run.wire.iter().filter(|w| w.ok) {
+        let e = rtcan_sim::candump::Entry {
+            time_ns: w.end,
+            iface: "can0".into(),
+            frame: w.frame,
+            standard: false,
+        };
+        if let Some(rtcan_sim::decode::Decoded::Message { topic, payload, .. }) = dec.push(&e) {
+            if w.end > from && family.contains(&cat.topics[topic].name.as_str()) {
+                out.push((w.end, robot::supervision::Table::decode(&payload).unwrap()));
+            }
+        }
+    }
+    out
+}
+
+/// Tables received over the bus by a module other than their reporter, after `from`.
+fn received(r: &TriskarRun, from: u64) -> Vec<(u64, usize, robot::supervision::Table)> {
+    r.module_state
+        .table_rx
+        .iter()
+        .filter(|(t, by, table)| *t > from && usize::from(table.reporter) != *by)
+        .cloned()
+        .collect()
+}
+
+/// Kills `victim` at `die_s`; returns cycles from its death to the first table received
+/// by another module that shows it missing.
+fn kill(victim: usize, seed: u64, die_s: f64) -> f64 {
+    let die = (die_s * 1e9) as u64;
+    let r = run(TriskarConfig {
+        sim: SimConfig {
+            seconds: 2.3,
+            seed,
+            record_wire: true,
+            ..SimConfig::default()
+        },
+        wall_x_m: 50.0,
+        module_dies_at: Some((victim, die_s)),
+        ..TriskarConfig::default()
+    });
+    let name = r.modules[victim].name;
+    let rx: Vec<(u64, usize, robot::supervision::Table)> = host_tables(&r, WARM_UP_NS)
+        .into_iter()
+        .map(|(t, x)| (t, usize::MAX, x))
+        .collect();
+    // Before the death: tables arrive (every 10 cycles), none shows a module missing.
+    let before: Vec<_> = rx.iter().filter(|(t, _, _)| *t <= die).collect();
+    assert!(before.len() > 50, "{name}: {} tables before", before.len());
+    for (t, by, table) in &before {
+        assert_eq!(table.missing(), 0, "{name}: at {t} by {by}: {table:?}");
+        assert_eq!(usize::from(table.reporter), usize::from(robot::MASTER));
+    }
+    let (at, by, table) = rx
+        .iter()
+        .find(|(t, _, table)| *t > die && table.missing() != 0)
+        .unwrap_or_else(|| panic!("{name} never shown missing over the bus"));
+    assert_eq!(table.missing(), 1 << victim, "{name}: only the victim");
+    let row = table.rows[victim];
+    assert!(!row.alive && row.heard, "{row:?}");
+    // The gateway's subscriber, the backup master motor1 (unless it is the victim),
+    // received the same table through its generated subscription, in the same frame.
+    let m1 = usize::from(robot::motor1::INDEX);
+    let modules = received(&r, WARM_UP_NS);
+    assert!(modules.iter().all(|(_, b, _)| *b == m1));
+    if victim != m1 {
+        let got = modules.iter().find(|(_, _, x)| x == table).unwrap();
+        assert!(got.0 >= *at && got.0 < *at + 1_000_000, "{} vs {at}", got.0);
+    }
+    let _ = by;
+    let cycles = (*at - die) as f64 / CYCLE_NS as f64;
+    eprintln!("{name}: died at {die} ns, missing in the table the host read at {at} ns ({cycles:.2} cycles)");
+    cycles
+}
+
+#[test]
+fn a_killed_module_shows_missing_in_the_table_received_over_the_bus() {
+    let mut worst: f64 = 0.0;
+    let mut best = f64::MAX;
+    for (victim, seed, die_s) in [
+        (robot::motor3::INDEX, 7, 2.0075),
+        (robot::motor2::INDEX, 5, 2.0),
+        (robot::psu::INDEX, 4, 2.0025),
+        (robot::proximity::INDEX, 6, 2.005),
+        (robot::motor1::INDEX, 8, 2.0099),
+    ] {
+        let c = kill(usize::from(victim), seed, die_s);
+        worst = worst.max(c);
+        best = best.min(c);
+    }
+    eprintln!("table over the bus: {best:.2} to {worst:.2} cycles after the death");
+    // Missing 3 cycle starts after the heartbeat it failed to send (3 to 4 cycles after
+    // the death), then one 92-byte NRT transfer.
+    assert!(best >= 2.5, "{best}");
+    assert!(worst <= 4.5, "{worst}");
+}
+
+#[test]
+fn table_counters_are_the_modules_engine_counters() {
+    let r = run(TriskarConfig {
+        sim: SimConfig {
+            seconds: 3.0,
+            seed: 3,
+            bit_error_rate: 1e-4,
+            ..SimConfig::default()
+        },
+        supervise: true,
+        ..TriskarConfig::default()
+    });
+    let log = &r.module_state;
+    let rx = received(&r, WARM_UP_NS);
+    assert!(rx.len() > 500, "{}", rx.len());
+    let mut nonzero = 0;
+    for (t, by, table) in &rx {
+        // The table a module received is one the sync master published, bit for bit.
+        let (sent_at, _) = log
+            .table_tx
+            .iter()
+            .rev()
+            .find(|(s, x)| s <= t && x == table)
+            .unwrap_or_else(|| panic!("received by {by} at {t}: never published"));
+        for row in &table.rows {
+            let m = usize::from(row.module);
+            if m == usize::from(table.reporter) {
+                continue;
+            }
+            // Each row's counters: what that module's engine counted when it last
+            // published its health before the table went out (the one before that if
+            // the last was still on the bus).
+            let sent: Vec<_> = log
+                .health_tx
+                .iter()
+                .filter(|(s, from, _)| *from == m && s <= sent_at)
+                .map(|(_, _, h)| *h)
+                .collect();
+            let recent = &sent[sent.len().saturating_sub(2)..];
+            assert!(
+                recent.contains(&row.health),
+                "module {m} in the table of {t}: {:?}, published {recent:?}",
+                row.health
+            );
+            if row.health.tec > 0 || row.health.rec > 0 {
+                nonzero += 1;
+            }
+        }
+    }
+    // Bit errors raise the error counters: the rows are not all zeros.
+    assert!(nonzero > 100, "{nonzero}");
+    // Every module's health publications are its engine counters: the last one of each
+    // equals its counters at the end within the last publication period.
+    for (m, rep) in r.modules.iter().enumerate() {
+        let last = log
+            .health_tx
+            .iter()
+            .rev()
+            .find(|(_, from, _)| *from == m)
+            .unwrap();
+        assert!(
+            last.0 + 11 * CYCLE_NS >= r.run.sim_ns,
+            "{}: {}",
+            rep.name,
+            last.0
+        );
+        assert_eq!(last.2.bus_off, rep.counters.bus_off, "{}", rep.name);
+        assert_eq!(last.2.rx_overrun, rep.counters.rx_overrun, "{}", rep.name);
+    }
+}
+
+#[test]
+fn the_backup_that_took_over_publishes_the_table() {
+    let r = run(TriskarConfig {
+        sim: SimConfig {
+            seconds: 3.0,
+            seed: 11,
+            record_wire: true,
+            ..SimConfig::default()
+        },
+        wall_x_m: 50.0,
+        module_dies_at: Some((usize::from(robot::MASTER), 2.0)),
+        ..TriskarConfig::default()
+    });
+    let die = 2_000_000_000;
+    // Nobody subscribes to motor1's table but the dead gateway: the host reads it.
+    let late = host_tables(&r, die + 100 * CYCLE_NS);
+    assert!(late.len() > 50, "{}", late.len());
+    for (t, table) in &late {
+        assert_eq!(table.reporter, robot::motor1::INDEX, "at {t}");
+        assert_eq!(table.sync_master, robot::motor1::INDEX);
+        assert_eq!(table.missing(), 1 << robot::MASTER, "at {t}");
+    }
+    // The dead gateway published nothing after its death; nobody else did before.
+    assert!(r
+        .module_state
+        .table_tx
+        .iter()
+        .all(|(t, x)| (*t <= die) == (x.reporter == robot::MASTER)));
+}
