@@ -444,7 +444,7 @@ impl<const N: usize> Supervisor<N> {
             }) => Some((module, fingerprint)),
             _ => None,
         };
-        let table = ModuleTable::snapshot_after(
+        let mut table = ModuleTable::snapshot_after(
             status,
             self.me,
             fingerprint,
@@ -452,6 +452,9 @@ impl<const N: usize> Supervisor<N> {
             &self.health,
             missing_after,
         );
+        // Its engine sends the sync: it is the sync master, whatever `SystemStatus`
+        // (which follows heartbeats, not its own engine) would name.
+        table.sync_master = self.me;
         let mut shown = [(false, 0u8); N];
         for (s, r) in shown.iter_mut().zip(&table.rows) {
             *s = (r.alive, r.state);
@@ -706,6 +709,7 @@ mod tests {
         let t = p.table.unwrap();
         assert_eq!(t.rows[0].health, own);
         assert_eq!(t.rows[1].fingerprint, 0xF00D);
+        assert_eq!((t.reporter, t.sync_master), (0, 0));
         assert_eq!(
             poll(&s, true),
             Publish {
