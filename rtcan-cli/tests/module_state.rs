@@ -55,7 +55,8 @@ fn echo_module_state_prints_the_masters_table_every_10_cycles() {
         .iter()
         .filter(|v| v["time"].as_f64().unwrap() > 0.3)
         .collect();
-    assert_eq!(steady.len(), 5, "{out}");
+    // 0.5 s of 0.1 s periods: 4 or 5 by the phase of the last start-up change.
+    assert!((4..=5).contains(&steady.len()), "{out}");
     let fp = fingerprint();
     let mut times = Vec::new();
     for v in steady {
