@@ -49,7 +49,10 @@ fn echo_module_state_prints_the_masters_table_every_10_cycles() {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
     // The first table, in the first cycle, has heard nobody but the gateway itself.
-    assert_eq!(lines[0]["value"]["flags"], serde_json::json!([3, 0, 0, 0, 0, 0]));
+    assert_eq!(
+        lines[0]["value"]["flags"],
+        serde_json::json!([3, 0, 0, 0, 0, 0])
+    );
     // After the start-up (tables at once on every change): every 10 cycles.
     let steady: Vec<&serde_json::Value> = lines
         .iter()

@@ -41,6 +41,8 @@ pub fn supervision(plan: &Plan) -> TokenStream {
         quote!(::rtcan::pubsub::supervision::MISSING_AFTER_CYCLES)
     };
     let modules = lit::usize(plan.modules.len());
+    // The heartbeats of a cycle are due by mid-cycle (`heartbeats_overdue`).
+    let due = lit::int(plan.bus.cycle_ns / 2);
     // Module-state publications: every this many cycles (`module_state::RATE_HZ`).
     let every = (1e9 / (rtcan_model::module_state::RATE_HZ * plan.bus.cycle_ns as f64)).round();
     let every = lit::int(if every >= 1.0 { every as u32 } else { 1 });
@@ -55,6 +57,10 @@ pub fn supervision(plan: &Plan) -> TokenStream {
             pub const HEARTBEAT_CYCLES: u8 = #beats;
             /// A module whose heartbeat is older than this (cycles) is missing.
             pub const MISSING_AFTER_CYCLES: u16 = #missing;
+            /// Phase of the cycle (ns after its start) by which its heartbeats are due:
+            /// past it the module table counts a module silent since the previous
+            /// cycle as missing (`rtcan::pubsub::supervision::table_missing_after_at`).
+            pub const HEARTBEAT_DUE_NS: u64 = #due;
             /// What a missing module means, per module that declares it.
             pub const RULES: &[::rtcan::pubsub::ModuleRule] = &[#(#rules),*];
             /// The module table as this robot has it.

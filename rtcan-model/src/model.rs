@@ -363,12 +363,23 @@ impl Model {
         self.nodes.get(node).map_or(0, |n| n.module)
     }
     /// True when some subscriber is on another module than the publisher: only those
-    /// topics go on the bus (local subscribers share memory, as in R2P).
+    /// topics go on the bus (local subscribers share memory, as in R2P), and the module
+    /// tables, which only the host reads.
     pub fn on_bus(&self, topic: &Topic) -> bool {
         let pm = self.node_module(topic.publisher);
         topic
             .subscribers
             .iter()
             .any(|s| self.node_module(s.node) != pm)
+            || self.is_module_table(topic)
+    }
+    /// True for a module table topic (`module_state_<m>`): on the bus with no module
+    /// subscribing, for the host (rtcan_model::module_state).
+    pub fn is_module_table(&self, topic: &Topic) -> bool {
+        self.module_state.as_ref().is_some_and(|s| {
+            s.tables
+                .iter()
+                .any(|&(_, t)| self.topics.get(t).is_some_and(|x| x.name == topic.name))
+        })
     }
 }

@@ -213,6 +213,7 @@ pub fn append(
         requested_period_ns: None,
         deadline_ns: None,
         rate_hz: Some(RATE_HZ),
+        lead_ns: None,
         subscribers: subs
             .into_iter()
             .map(|node| Subscriber {
@@ -229,9 +230,8 @@ pub fn append(
         ..StateTopics::default()
     };
     // Health goes to every sync-capable module (the one that takes over needs the
-    // counters too), the table to the other sync-capable ones: both depend on the
-    // module count, so adding a module changes only the sync-capable images besides
-    // its own (robot.lock, tests/compat.rs); the host reads the table off the bus.
+    // counters too): adding a module changes only the sync-capable images besides its
+    // own (robot.lock, tests/compat.rs).
     for (m, name) in health_names {
         let subs = masters
             .iter()
@@ -244,16 +244,17 @@ pub fn append(
         model.topics.push(topic(&name, health_ty, publisher, subs));
         out.health.push((m, model.topics.len() - 1));
     }
+    // The table has no subscriber on the bus: only the host reads it (`rtcan echo
+    // module_state`, `rtcan monitor`), so no firmware image carries its 92-byte decoder
+    // (examples/triskar2/budgets.toml) and adding a module changes no other image's
+    // receive tables through it.
     for (m, name) in table_names {
-        let subs = masters
-            .iter()
-            .filter(|&&x| x != m)
-            .filter_map(|&x| first_node(x))
-            .collect();
         let Some(publisher) = first_node(m) else {
             continue;
         };
-        model.topics.push(topic(&name, state_ty, publisher, subs));
+        model
+            .topics
+            .push(topic(&name, state_ty, publisher, Vec::new()));
         out.tables.push((m, model.topics.len() - 1));
     }
     Some(out)

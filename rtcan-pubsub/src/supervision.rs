@@ -11,7 +11,9 @@ use rtcan_core::confinement::ErrorState;
 use rtcan_core::counters::Counters;
 use rtcan_core::heartbeat::HEARTBEAT_PERIOD_CYCLES;
 
+use crate::slot_grid::SlotGrid;
 use crate::status::SystemStatus;
+use rtcan_core::time::Nanos;
 
 /// Cycles of lateness tolerated beyond the heartbeat period (the heartbeat is NRT:
 /// it may wait for a cycle with free bandwidth).
@@ -34,6 +36,60 @@ pub const SUPERVISED_SLACK_CYCLES: u16 = 2;
 /// death, depending on where in the cycle it died).
 pub const fn missing_after(heartbeat_cycles: u8) -> u16 {
     heartbeat_cycles as u16 + SUPERVISED_SLACK_CYCLES
+}
+
+/// The module table's missing age at this moment (docs/SERVICES.md §1). Before the
+/// cycle's due phase (`heartbeats_overdue`), the rules' age (`missing_after`): a sync
+/// frame destroyed by an error frame silences every slave for a cycle or two, and while
+/// their heartbeats come back one by one in the next cycle none of them may look
+/// missing. Once the cycle's heartbeats are overdue, `heartbeat_cycles`: with a heartbeat
+/// every cycle a module is missing when its heartbeat of the previous cycle never came
+/// and the one of this cycle has not come by the due phase. A module killed just after
+/// its heartbeat is thus shown missing 2 cycles + the due phase after that heartbeat,
+/// 2.5 cycles at most after its death with the due phase at mid-cycle (the rules' age
+/// alone: up to 4 cycles).
+pub const fn table_missing_after_at(heartbeat_cycles: u8, overdue: bool) -> u16 {
+    if overdue {
+        heartbeat_cycles as u16
+    } else {
+        missing_after(heartbeat_cycles)
+    }
+}
+
+/// Whether this cycle's heartbeats are overdue at local time `now`: the phase in the
+/// cycle (on the slot grid, `SystemStatus::grid`) is past `due_ns`. Every engine sends
+/// its heartbeat in the first free window of the cycle (after its queued frames: on the
+/// simulated Triskar2 they end 0.8 to 3.6 ms after the sync's start, at BER 1e-4 too),
+/// so `due_ns` half a cycle leaves them more than a millisecond. The last tenth of the
+/// cycle never counts as overdue: there the engine's cycle start (which ages the
+/// heartbeats) and the grid snapshot may disagree on which cycle `now` is in, and an age
+/// counted in the next cycle must not meet a phase of the previous one. No grid (not
+/// synchronised): never overdue (the cycle-count rule alone).
+pub fn heartbeats_overdue(grid: Option<SlotGrid>, now: Nanos, due_ns: Nanos) -> bool {
+    let Some(g) = grid else { return false };
+    let c = g.cycle_local;
+    if c == 0 {
+        return false;
+    }
+    let phase = if now >= g.start {
+        (now - g.start) % c
+    } else {
+        (c - (g.start - now) % c) % c
+    };
+    phase >= due_ns && phase < c - c / 10
+}
+
+/// Local time of the next due phase after `now` on `grid` (when a sync master polls its
+/// `Supervisor` so a verdict is not left waiting for some other wake-up).
+pub fn next_due(grid: Option<SlotGrid>, now: Nanos, due_ns: Nanos) -> Option<Nanos> {
+    let g = grid?;
+    let c = g.cycle_local;
+    if c == 0 || now < g.start {
+        return None;
+    }
+    let cycle_start = now - (now - g.start) % c;
+    let due = cycle_start + due_ns;
+    Some(if due > now { due } else { due + c })
 }
 
 /// What a missing module means (robot.toml `[modules.<m>] on_missing`).
@@ -883,5 +939,84 @@ mod tests {
         assert_eq!(s.safe_reason(), None);
         s.event(Event::SyncLost);
         assert_eq!(s.safe_reason(), Some(SafeReason::NoSync));
+    }
+
+    #[test]
+    fn heartbeats_overdue_from_the_due_phase_to_the_last_tenth_of_the_cycle() {
+        let g = SlotGrid {
+            cycle: 7,
+            start: 21_000_000,
+            cycle_local: 10_000_000,
+        };
+        let due = 5_000_000;
+        let at = |phase: u64, cycles_later: u64| 21_000_000 + cycles_later * 10_000_000 + phase;
+        assert!(!heartbeats_overdue(Some(g), at(4_999_999, 0), due));
+        assert!(heartbeats_overdue(Some(g), at(5_000_000, 0), due));
+        assert!(heartbeats_overdue(Some(g), at(8_999_999, 3), due));
+        // The last tenth: the cycle start may already have aged the heartbeats.
+        assert!(!heartbeats_overdue(Some(g), at(9_000_000, 3), due));
+        assert!(!heartbeats_overdue(Some(g), at(0, 4), due));
+        // Before the snapshot's cycle: the same phases.
+        assert!(heartbeats_overdue(Some(g), 21_000_000 - 4_000_000, due));
+        assert!(!heartbeats_overdue(Some(g), 21_000_000 - 6_000_000, due));
+        // Not synchronised, or a degenerate grid: the cycle-count rule alone.
+        assert!(!heartbeats_overdue(None, at(6_000_000, 0), due));
+        let flat = SlotGrid {
+            cycle_local: 0,
+            ..g
+        };
+        assert!(!heartbeats_overdue(Some(flat), at(6_000_000, 0), due));
+        // The next due phase after now.
+        assert_eq!(next_due(Some(g), at(1, 2), due), Some(at(5_000_000, 2)));
+        assert_eq!(
+            next_due(Some(g), at(5_000_000, 2), due),
+            Some(at(5_000_000, 3))
+        );
+        assert_eq!(next_due(Some(g), 10, due), None);
+        assert_eq!(next_due(None, at(1, 2), due), None);
+    }
+
+    #[test]
+    fn table_missing_age_drops_to_one_cycle_past_the_due_phase() {
+        assert_eq!(table_missing_after_at(1, false), 3);
+        assert_eq!(table_missing_after_at(1, true), 1);
+        let s = SystemStatus::new(CFG);
+        s.event(Event::Synced);
+        beat(&s, 1);
+        beat(&s, 2);
+        let t = |overdue| {
+            ModuleTable::<3>::snapshot_after(
+                &s,
+                0,
+                1,
+                None,
+                &Default::default(),
+                table_missing_after_at(1, overdue),
+            )
+        };
+        // Module 2 beats in the next cycle, module 1 does not.
+        cycles(&s, 1);
+        beat(&s, 2);
+        assert_eq!((t(false).missing(), t(true).missing()), (0, 0));
+        // The cycle after: module 1's previous heartbeat never came, and by the due
+        // phase neither has this one: missing then, not before.
+        cycles(&s, 1);
+        assert_eq!(t(false).missing(), 0);
+        beat(&s, 2);
+        assert_eq!(t(false).missing(), 0);
+        assert_eq!(t(true).missing(), 0b10);
+        assert_eq!(t(true).rows[1].age, 2);
+        // It comes back: alive at once.
+        beat(&s, 1);
+        assert_eq!(t(true).missing(), 0);
+        // Every other module silent for two cycles (a lost sync): nobody is missing.
+        cycles(&s, 2);
+        assert_eq!(t(true).missing(), 0);
+        // Their heartbeats coming back one by one before the due phase: still nobody.
+        cycles(&s, 1);
+        beat(&s, 2);
+        assert_eq!(t(false).missing(), 0);
+        beat(&s, 1);
+        assert_eq!(t(true).missing(), 0);
     }
 }

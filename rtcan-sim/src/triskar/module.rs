@@ -520,13 +520,14 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 .service
                 .as_mut()
                 .and_then(|s| s.poll(now, global, &mut shared));
+            let mut state_next = None;
             if let Some(io) = self.state_io.as_mut() {
                 let own = rtcan::pubsub::EngineHealth::new(
                     self.engine.counters(),
                     &self.engine.error_state(),
                 );
                 let master = self.engine.is_master();
-                io.poll(
+                state_next = io.poll(
                     self.status,
                     own,
                     master,
@@ -535,6 +536,10 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                     &mut shared.module_state,
                 );
             }
+            let svc = match (svc, state_next) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            };
             (next, svc)
         };
         let app_next = svc_next.map_or(app_next, |s| s.min(app_next));

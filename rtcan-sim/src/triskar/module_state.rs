@@ -6,7 +6,7 @@
 //! it (`TriskarConfig::supervise`, `module_dies_at`), so a test compares the table *as
 //! received over the bus* with the engines' own counters.
 use rtcan::core::Nanos;
-use rtcan::pubsub::EngineHealth;
+use rtcan::pubsub::{supervision, EngineHealth};
 use rtcan::robot_toml as robot;
 
 use robot::supervision::{Supervisor, Table, PUBLISH_CYCLES};
@@ -53,7 +53,10 @@ impl StateIo {
     }
 
     /// One pass of the module's loop: take in the healths received, publish what is
-    /// due, read the tables received. `now` local, `global` for the log.
+    /// due, read the tables received. `now` local, `global` for the log. Returns when
+    /// the sync master wants its next pass: at the next due phase of the heartbeats, so
+    /// a module whose heartbeat did not come is shown missing then, not at whatever
+    /// wakes the module next.
     pub fn poll(
         &mut self,
         status: &rtcan::pubsub::SystemStatus,
@@ -62,15 +65,18 @@ impl StateIo {
         now: Nanos,
         global: Nanos,
         log: &mut StateLog,
-    ) {
+    ) -> Option<Nanos> {
         let sv = &mut self.sv;
         (self.drain_health)(&mut |m, h| sv.health_rx(m, h));
+        let grid = status.grid();
+        let due = robot::supervision::HEARTBEAT_DUE_NS;
+        let overdue = supervision::heartbeats_overdue(grid, now, due);
         let p = self.sv.poll(
             status,
             own,
             is_master,
             robot::FINGERPRINT,
-            robot::supervision::MISSING_AFTER_CYCLES,
+            supervision::table_missing_after_at(robot::supervision::HEARTBEAT_CYCLES, overdue),
         );
         let me = usize::from(self.me);
         if let Some(h) = p.health {
@@ -92,6 +98,9 @@ impl StateIo {
                 rx.push((global, me, t));
             }
         });
+        is_master
+            .then(|| supervision::next_due(grid, now, due))
+            .flatten()
     }
 }
 
