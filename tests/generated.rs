@@ -216,19 +216,16 @@ fn module_tables_equal_the_plan_and_the_macro_output() {
         robot::motor2::TABLES.calendar
     );
     // Engine sizes: motor1 receives `velocity` (12 B), and as the backup master the
-    // five other modules' health (8 B each) and the gateway's module table (2 + 15 × 6);
-    // the gateway receives odometry (24), proximity (8), battery (5), log (32), the
-    // `proximity_read` service's reply frames (5: call number + sensor + range), the
-    // five other modules' health and motor1's module table (robot.toml `on_missing`).
+    // five other modules' health (8 B each); the gateway receives odometry (24),
+    // proximity (8), battery (5), log (32), the `proximity_read` service's reply frames
+    // (5: call number + sensor + range) and the five other modules' health (robot.toml
+    // `on_missing`). No module receives a module table: only the host reads it.
     assert_eq!(
         (robot::motor1::RX_COUNT, robot::motor1::ARENA_BYTES),
-        (1 + 5 + 1, 12 + 5 * 8 + 92)
+        (1 + 5, 12 + 5 * 8)
     );
-    assert_eq!(robot::gateway::RX_COUNT, 5 + 5 + 1);
-    assert_eq!(
-        robot::gateway::ARENA_BYTES,
-        24 + 8 + 5 + 32 + 5 + 5 * 8 + 92
-    );
+    assert_eq!(robot::gateway::RX_COUNT, 5 + 5);
+    assert_eq!(robot::gateway::ARENA_BYTES, 24 + 8 + 5 + 32 + 5 + 5 * 8);
     // The gateway sends proximity_read requests (SRT, queue of in_flight = 2) besides
     // teleop (queue 2), its heartbeat, its health and its module table (NRT, queue 1).
     assert_eq!(robot::gateway::QUEUE_CAPACITY, 1 + 2 + 2 + 1 + 1);
