@@ -317,7 +317,7 @@ fn monitor_screen_shows_the_live_view_as_text() {
     {
         let row = lines[3 + k].trim_end_matches([' ', '│']);
         assert!(row.starts_with(&format!("│{m:<12} {k}")), "{row}");
-        assert!(row.ends_with("0x74df1f67   yes"), "{row}");
+        assert!(row.ends_with("0x17f0eebf   yes"), "{row}");
     }
     let wheel = lines
         .iter()
