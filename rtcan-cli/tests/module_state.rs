@@ -27,7 +27,7 @@ fn rtcan(args: &[&str]) -> (i32, String, String) {
 }
 
 fn fingerprint() -> u64 {
-    let plan = rtcan_model::Robot::load(&root().join("robot.toml"))
+    let plan = rtcan_model::Robot::load(root().join("robot.toml"))
         .unwrap_or_else(|d| panic!("{}", d.render()));
     u64::from(plan.fingerprint)
 }
