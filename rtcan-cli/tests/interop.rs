@@ -103,7 +103,10 @@ fn dbc_of_the_workspace_robot() {
     assert!(text.contains(" SG_ range_mm_3 : 48|16@1+ (1,0) [0|65535] \"\" "));
     // The gateway's health: NRT, message 0x153 (after every declared and service topic).
     assert!(
-        text.contains(&format!("BO_ {} health_gateway: 8 gateway\n", 0x9F80_A980u32)),
+        text.contains(&format!(
+            "BO_ {} health_gateway: 8 gateway\n",
+            0x9F80_A980u32
+        )),
         "{text}"
     );
     assert!(text.contains(" SG_ deadline_missed : 48|16@1+ (1,0) [0|65535] \"\" "));

@@ -106,7 +106,10 @@ fn update_lock_then_add_a_module() {
     }
     assert!(relock.contains("topic imu_rate "));
     assert!(relock.contains("topic module_state_gateway 0x0156 "));
-    let retired: Vec<&str> = relock.lines().filter(|l| l.starts_with("retired")).collect();
+    let retired: Vec<&str> = relock
+        .lines()
+        .filter(|l| l.starts_with("retired"))
+        .collect();
     assert_eq!(retired, ["retired 0x0150", "retired 0x0151"]);
     // A damaged lock is refused with its line.
     std::fs::write(
