@@ -80,7 +80,7 @@ fn two_robots_exchange_declared_topics_through_a_router() {
     );
     let (follower, follower_out, fh) = bridge("robots/triskar2_follower.toml", &endpoint);
     assert!(
-        fh[0].starts_with("bridge ready: 11 topics on rtcan/follower/*")
+        fh[0].starts_with("bridge ready: 19 topics on rtcan/follower/*")
             && fh[0].ends_with("writable: teleop"),
         "{fh:?}"
     );

@@ -515,9 +515,18 @@ impl<const N: usize> Supervisor<N> {
         for (s, r) in shown.iter_mut().zip(&table.rows) {
             *s = (r.alive, r.state);
         }
+        // A table goes out on its period, at once when a module turns missing, and for
+        // other changes (modules heard one by one at start-up, state changes) at most
+        // once a cycle: a newer table replaces one still on the bus, and a burst of them
+        // would leave only broken transfers on the wire.
         let send = match self.last_table {
             None => true,
-            Some((at, was)) => was != shown || cycle.wrapping_sub(at) >= self.every,
+            Some((at, was)) => {
+                let newly_missing = was.iter().zip(&shown).any(|(w, n)| w.0 && !n.0);
+                cycle.wrapping_sub(at) >= self.every
+                    || newly_missing
+                    || (was != shown && cycle != at)
+            }
         };
         if send {
             self.last_table = Some((cycle, shown));
@@ -1018,5 +1027,42 @@ mod tests {
         assert_eq!(t(false).missing(), 0);
         beat(&s, 1);
         assert_eq!(t(true).missing(), 0);
+    }
+
+    #[test]
+    fn supervisor_sends_other_changes_once_a_cycle_and_a_missing_module_at_once() {
+        let s = SystemStatus::new(CFG);
+        s.event(Event::Synced);
+        let mut sv = Supervisor::<3>::new(0, 10);
+        let own = EngineHealth::default();
+        cycles(&s, 1);
+        beat(&s, 1);
+        beat(&s, 2);
+        assert!(sv.poll(&s, own, true, 1, 3).table.is_some());
+        // Module 2 announces another state in the same cycle: not yet.
+        s.event(Event::Heartbeat {
+            module: 2,
+            state: 3,
+        });
+        assert_eq!(sv.poll(&s, own, true, 1, 3).table, None);
+        // Next cycle: sent, with the new state.
+        cycles(&s, 1);
+        beat(&s, 1);
+        let t = sv.poll(&s, own, true, 1, 3).table.unwrap();
+        assert_eq!(t.rows[2].state, 3);
+        // The next cycle: module 1 announces another state, sent (a new cycle); past
+        // the due phase (missing age 1) module 2, silent this cycle and the last, turns
+        // missing and goes out at once, in the same cycle.
+        cycles(&s, 1);
+        s.event(Event::Heartbeat {
+            module: 1,
+            state: 5,
+        });
+        assert_eq!(
+            sv.poll(&s, own, true, 1, 3).table.map(|t| t.missing()),
+            Some(0)
+        );
+        let t = sv.poll(&s, own, true, 1, 1).table.unwrap();
+        assert_eq!(t.missing(), 1 << 2);
     }
 }
