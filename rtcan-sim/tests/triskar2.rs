@@ -246,7 +246,10 @@ fn hrt_samples_are_at_most_lead_plus_20_us_old_on_the_bus() {
             );
             seen.push(a.topic.clone());
         }
-        assert_eq!(m.counters.hrt_empty, 0, "{}", m.name);
+        // No HRT slot empty, but odometry's first (21 ms): Triskar2 is supervised and
+        // motor2 stays in its safe state until every module's first heartbeat was heard.
+        let empty = u32::from(m.name == "motor2");
+        assert_eq!(m.counters.hrt_empty, empty, "{}", m.name);
     }
     seen.sort();
     // The HRT topics on the bus (encoder2 stays on motor2).
