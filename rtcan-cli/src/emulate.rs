@@ -1,4 +1,4 @@
-//! `rtcan sim [robot.toml] --emulate [--seconds N] [--seed N] [--cpi X] [--json] [--images DIR]`: runs the
+//! `rtcan sim [robot.toml] --emulate [--seconds N] [--seed N] [--cpi X] [--ber P] [--fault F]... [--json] [--images DIR]`: runs the
 //! workspace robot's Triskar2 release images on emulated STM32F103s by starting the
 //! `rtcan-emu` program (docs/EMULATOR.md). A separate process on purpose: rtcan-emu links
 //! the GPL-2.0 Unicorn, which the `rtcan` command (MIT OR Apache-2.0) must not.

@@ -12,7 +12,7 @@ use rtcan_sim::{candump, report};
 
 /// `rtcan sim`: the workspace robot runs triskar2, any other robot its generic traffic
 /// scenario. `--emulate` runs the Triskar2 release images on emulated STM32F103s instead
-/// (options --seconds, --seed, --cpi, --json, --images; docs/EMULATOR.md); `--campaign`
+/// (options --seconds, --seed, --cpi, --ber, --fault, --json, --images; docs/EMULATOR.md); `--campaign`
 /// runs the fault campaign on triskar2 and rtcan-paper, N s per case (default 10).
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -197,12 +197,10 @@ fn emulate_args(a: Args) -> Result<Vec<String>, String> {
     let other = [
         ("--scenario", a.scenario.is_some()),
         ("--load", a.load.is_some()),
-        ("--ber", a.ber.is_some()),
         ("--out", a.out.is_some()),
         ("--log-epoch", a.log_epoch.is_some()),
         ("--sweep", a.sweep),
         ("--master-dies-at", a.master_dies_at.is_some()),
-        ("--fault", !a.fault.is_empty()),
         ("--campaign", a.campaign),
         ("--cpu", a.cpu != "on"),
         ("--cpu-design", a.cpu_design.is_some()),
@@ -210,7 +208,7 @@ fn emulate_args(a: Args) -> Result<Vec<String>, String> {
     ];
     if let Some((flag, _)) = other.iter().find(|(_, set)| *set) {
         return Err(format!(
-            "`{flag}` does not apply with --emulate (options: --seconds, --seed, --cpi, --json, --images)"
+            "`{flag}` does not apply with --emulate (options: --seconds, --seed, --cpi, --ber, --fault, --json, --images)"
         ));
     }
     let mut forward = Vec::new();
@@ -223,6 +221,26 @@ fn emulate_args(a: Args) -> Result<Vec<String>, String> {
             ));
         }
     }
+    if let Some(ber) = a.ber {
+        if !(0.0..1.0).contains(&ber) {
+            return Err("--ber must be in [0, 1)".into());
+        }
+    }
+    // rtcan-emu applies rtcan-sim's bus faults and resets to the emulated MCUs; the kinds
+    // that need a power switch or the module's software to cooperate are refused here,
+    // before the emulator starts (docs/EMULATOR.md).
+    for f in &a.fault {
+        let fault = rtcan_sim::fault::parse(f, &rtcan_sim::triskar::MODULES)?;
+        if !emulated_fault(fault.kind) {
+            let kind = f
+                .split_once(':')
+                .and_then(|(_, r)| r.split(['@', '=']).next())
+                .unwrap_or(f);
+            return Err(format!(
+                "--fault `{f}`: `{kind}` cannot be emulated (it needs the module's power switched or its software to cooperate); the emulated faults are stuck, release, partition, rejoin and reset"
+            ));
+        }
+    }
     if a.json {
         forward.push("--json".to_string());
     }
@@ -231,6 +249,7 @@ fn emulate_args(a: Args) -> Result<Vec<String>, String> {
         ("--seed", a.seed.map(|v| v.to_string())),
         ("--cpi", a.cpi.map(|v| v.to_string())),
         ("--images", a.images.map(|v| v.display().to_string())),
+        ("--ber", a.ber.map(|v| v.to_string())),
     ];
     for (flag, v) in pairs {
         if let Some(v) = v {
@@ -238,7 +257,21 @@ fn emulate_args(a: Args) -> Result<Vec<String>, String> {
             forward.push(v);
         }
     }
+    for f in a.fault {
+        forward.push("--fault".to_string());
+        forward.push(f);
+    }
     Ok(forward)
+}
+
+/// Whether rtcan-emu models fault `kind` (its `bus::Bus::schedule`): faults of the bus
+/// and a module reset.
+fn emulated_fault(kind: rtcan_sim::fault::FaultKind) -> bool {
+    use rtcan_sim::fault::FaultKind as K;
+    matches!(
+        kind,
+        K::Stuck | K::Release | K::Partition | K::Rejoin | K::Reset
+    )
 }
 
 /// Writes to stdout; a closed pipe (`| head`) ends the output quietly.
@@ -585,6 +618,85 @@ mod tests {
             .unwrap();
         assert_eq!(ok.req.which, Which::Paper);
         assert!(ok.req.seconds_given);
+    }
+
+    /// `rtcan sim S` through clap and `emulate_args`: what `rtcan-emu` is given.
+    fn emulate_line(s: &str) -> Result<Vec<String>, String> {
+        let argv = ["rtcan", "sim"].into_iter().chain(s.split_whitespace());
+        let m = crate::command()
+            .try_get_matches_from(argv)
+            .map_err(|e| e.to_string())?;
+        match <crate::Cli as clap::FromArgMatches>::from_arg_matches(&m)
+            .map_err(|e| e.to_string())?
+            .cmd
+        {
+            crate::Cmd::Sim(a) => emulate_args(*a),
+            _ => Err("not sim".into()),
+        }
+    }
+
+    #[test]
+    fn emulate_forwards_ber_and_faults() {
+        let fwd = emulate_line(
+            "--emulate --seconds 2 --ber 0.0001 --fault motor1:stuck@1s --fault motor1:release@1100ms --fault psu:reset@1.5s --json",
+        )
+        .unwrap();
+        assert_eq!(
+            fwd,
+            [
+                "--json",
+                "--seconds",
+                "2",
+                "--ber",
+                "0.0001",
+                "--fault",
+                "motor1:stuck@1s",
+                "--fault",
+                "motor1:release@1100ms",
+                "--fault",
+                "psu:reset@1.5s"
+            ]
+        );
+        let fwd = emulate_line("--emulate --fault gateway:partition@1s --fault gateway:rejoin@2s")
+            .unwrap();
+        assert_eq!(
+            fwd,
+            [
+                "--fault",
+                "gateway:partition@1s",
+                "--fault",
+                "gateway:rejoin@2s"
+            ]
+        );
+        assert_eq!(emulate_line("--emulate").unwrap(), Vec::<String>::new());
+        // Faults the emulator cannot model are refused before it starts, with the kind.
+        for (bad, kind) in [
+            ("motor1:dies@1s", "dies"),
+            ("motor1:returns@2s", "returns"),
+            ("gateway:babble@1s", "babble"),
+            ("motor2:stall=5ms@1s", "stall"),
+            ("motor2:step=+1ms@1s", "step"),
+        ] {
+            let e = emulate_line(&format!("--emulate --fault {bad}")).unwrap_err();
+            assert!(
+                e.contains(&format!("`{bad}`: `{kind}` cannot be emulated"))
+                    && e.contains("stuck, release, partition, rejoin and reset"),
+                "{bad}: {e}"
+            );
+        }
+        // A malformed fault is rtcan-sim's parse error; a bad rate is refused.
+        let e = emulate_line("--emulate --fault motor9:stuck@1s").unwrap_err();
+        assert!(e.contains("motor9") && e.contains("accepted"), "{e}");
+        for v in ["1", "-0.1", "2"] {
+            let e = emulate_line(&format!("--emulate --ber {v}")).unwrap_err();
+            assert!(e.contains("--ber must be in [0, 1)"), "{v}: {e}");
+        }
+        // Still refused: options of the simulator only.
+        let e = emulate_line("--emulate --campaign").unwrap_err();
+        assert!(
+            e.contains("`--campaign` does not apply with --emulate"),
+            "{e}"
+        );
     }
 
     #[test]

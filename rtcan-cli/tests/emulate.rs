@@ -49,3 +49,18 @@ fn emulate_rejects_simulator_only_options() {
         "{err}"
     );
 }
+
+#[test]
+fn emulate_refuses_faults_the_emulator_cannot_model() {
+    // Checked before rtcan-emu starts: exit 2 and the reason, whether or not the
+    // emulator is built.
+    let (code, err) = rtcan(&["sim", "--emulate", "--fault", "motor1:dies@1s"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--fault `motor1:dies@1s`: `dies` cannot be emulated"),
+        "{err}"
+    );
+    let (code, err) = rtcan(&["sim", "--emulate", "--ber", "1.5"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--ber must be in [0, 1)"), "{err}");
+}

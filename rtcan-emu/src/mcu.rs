@@ -57,6 +57,37 @@ pub struct WriteRecord {
     pub value: u32,
 }
 
+/// Why a Unicorn run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Why {
+    /// The next peripheral event.
+    Event,
+    /// The caller's end time (`run_until`'s `until`).
+    Until,
+    /// The longest run `run_until` allows.
+    Chunk,
+    /// After an instruction that may unmask a pending interrupt.
+    Unmask,
+    /// After a store to a timer, the bxCAN or the SCS.
+    Replan,
+}
+
+/// Counts of Unicorn runs by what ended them (`State::slices`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Slices {
+    pub event: u64,
+    pub until: u64,
+    pub chunk: u64,
+    pub unmask: u64,
+    pub replan: u64,
+    /// WFI or `b .` reached.
+    pub sleep: u64,
+    /// An exception return (branch to EXC_RETURN).
+    pub exc_return: u64,
+    /// A fault or anything else.
+    pub other: u64,
+}
+
 /// Everything the callbacks reach (boxed: Unicorn holds its address).
 pub struct State {
     pub timing: Timing,
@@ -68,6 +99,14 @@ pub struct State {
     /// Picoseconds per instruction at the current clocks.
     instr_ps: f64,
     budget: u64,
+    /// Where a run that ended asleep resumes (`sleep_at`).
+    resume_pc: Option<u32>,
+    /// The instruction at which the current run was asked to stop (`on_code`).
+    stop_at: Option<u32>,
+    /// What set `budget` last (why the current run will end there).
+    budget_why: Why,
+    /// Unicorn runs (`uc_emu_start`) by what ended them: the emulator's own cost.
+    pub slices: Slices,
     pub scs: Scs,
     pub rcc: Rcc,
     pub flash: Flash,
@@ -264,6 +303,134 @@ impl State {
         r.map_err(|_| addr)
     }
 
+    /// Interrupt lines of the peripherals into the NVIC (RM0008 §10.1.2, table 63): every
+    /// line that is high now sets its IRQ pending. Returns whether TIM2's line rose (the
+    /// slot probe's boundary).
+    fn raise_lines(&mut self) -> bool {
+        let now = self.now();
+        let clk = self.rcc.tim2clk();
+        let mut tim2_rose = false;
+        // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
+        for (i, t) in self.tim.iter_mut().enumerate() {
+            t.sync(now, clk);
+            if i == 0 {
+                let before = self.probe.line();
+                self.probe.timer_line(t.irq(), now);
+                tim2_rose = t.irq() && !before;
+            }
+            if t.irq() {
+                self.scs.set_pending(28 + i);
+            }
+        }
+        let cyc = self.cycles();
+        self.scs.sync_systick(cyc);
+        let bit = now / self.bit_ps.max(1);
+        self.can.tick(bit);
+        let lines = self.can.irq_lines();
+        for (i, irq) in [
+            crate::bxcan::IRQ_TX,
+            crate::bxcan::IRQ_RX0,
+            crate::bxcan::IRQ_RX1,
+            crate::bxcan::IRQ_SCE,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if lines.get(i) == Some(&true) {
+                self.scs.set_pending(irq);
+            }
+        }
+        // EXTI lines 0..4 have their own IRQs 6..10 (table 63).
+        for line in 0..5 {
+            if self.exti.pr & (1 << line) != 0 {
+                self.scs.set_pending(6 + line);
+            }
+        }
+        // USART1: IRQ 37; DMA1 channels 4 and 5: IRQ 14 and 15 (table 63).
+        if self.usart1.irq(now, self.rcc.pclk2()) {
+            self.scs.set_pending(37);
+        }
+        for (c, irq) in [(3, 14), (4, 15)] {
+            if self.dma1.irq(c) {
+                self.scs.set_pending(irq);
+            }
+        }
+        tim2_rose
+    }
+
+    /// The next time (ps) a peripheral changes an interrupt line by itself.
+    fn next_event(&self) -> Option<u64> {
+        let now = self.now();
+        let mut t: Option<u64> = None;
+        let mut at = |x: u64| t = Some(t.map_or(x, |y: u64| y.min(x)));
+        for tim in &self.tim {
+            if let Some(x) = tim.next_event(now, self.rcc.tim2clk()) {
+                at(x);
+            }
+        }
+        let hz = self.rcc.hclk().max(1);
+        if let Some(c) = self.scs.systick_due_in() {
+            at(now + c * PS / hz);
+        }
+        if let Some(b) = self.can.next_event() {
+            at(b * self.bit_ps);
+        }
+        if let Some(d) = self.iwdg.deadline {
+            at(d);
+        }
+        if let Some(x) = self.usart1.next_event(now, self.rcc.pclk2()) {
+            at(x);
+        }
+        t
+    }
+
+    /// After a store that may move the next event or raise an interrupt line (a timer,
+    /// the bxCAN, the SCS), from inside the run: does what the run loop would do at the
+    /// next instruction boundary, without ending the run unless that boundary must act.
+    /// The lines are raised now (as the loop's `raise_irqs` would after this
+    /// instruction, at the same emulated time); the run ends after this instruction
+    /// when an exception can be taken, TIM2's line rose (the probe records the core's
+    /// state there), a reset was requested, or the bus waits for this transmit request;
+    /// else it goes on, shortened if the next event moved earlier. The budget is the one
+    /// the loop would compute at that boundary, so timing is unchanged.
+    fn after_write(&mut self) {
+        let tim2_rose = self.raise_lines();
+        let stop = tim2_rose
+            || self.scs.reset_request
+            || (self.stop_on_txrq && self.txrq_at.is_some())
+            || {
+                let primask = self.reg(REG_PRIMASK) & 1 != 0;
+                let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
+                let basepri = self.reg(REG_BASEPRI) as u8;
+                let exec = self.scs.execution_priority(primask, faultmask, basepri);
+                self.scs.next_exception(exec).is_some()
+            };
+        if stop {
+            if self.instructions + 1 < self.budget {
+                self.budget = self.instructions + 1;
+                self.budget_why = Why::Replan;
+            }
+            return;
+        }
+        if let Some(e) = self.next_event() {
+            let left = e.saturating_sub(self.now());
+            let n = ((left as f64 / self.instr_ps.max(1.0)) as u64).max(1);
+            // The storing instruction is counted: n more execute, as `run_until` would
+            // let run from the boundary after it.
+            if self.instructions + n + 1 < self.budget {
+                self.budget = self.instructions + n + 1;
+                self.budget_why = Why::Event;
+            }
+        }
+    }
+
+    fn reg(&self, r: i32) -> u32 {
+        let mut v: u32 = 0;
+        // SAFETY: `uc` is the live engine of this state; `v` is a valid u32 out-parameter.
+        unsafe { uc_reg_read(self.uc, r, (&mut v as *mut u32).cast()) };
+        v
+    }
+
     fn unknown_access(&mut self, addr: u32, write: bool) {
         self.unknown_count += 1;
         // One record per (address, direction): the first one, with its PC and time.
@@ -331,10 +498,10 @@ extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *
     let replan = (0x4000_0000..0x4000_0C00).contains(&aligned)
         || (0x4000_6400..0x4000_6800).contains(&aligned)
         || (0xE000_E000..0xE000_F000).contains(&aligned);
-    // Stopping here, inside an instruction, would resume at a stale PC: the code hook
-    // stops cleanly before the next instruction instead.
+    // Stopping here, inside an instruction, would resume at a stale PC: `after_write`
+    // shortens the budget instead, and the code hook stops before the next instruction.
     if replan {
-        st.budget = st.budget.min(st.instructions + 1);
+        st.after_write();
     }
 }
 
@@ -353,8 +520,11 @@ extern "C" fn on_code(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void
     if st.instructions >= st.budget {
         // SAFETY: `uc` is the engine calling this hook.
         unsafe { uc_emu_stop(uc) };
-        // The instruction does not execute (Unicorn checks the stop request right after
-        // the hook); its site is acted on when the next run reaches it again.
+        // The instruction normally does not execute (Unicorn checks the stop request
+        // right after the hook): `run_until` uncounts it when the run ends on it. Inside
+        // an IT block no check follows the hook and the instructions up to the block's
+        // end run (and are counted here). Its site is acted on when the next run reaches it.
+        st.stop_at.get_or_insert(addr as u32);
         return;
     }
     match st.sites.at(addr as u32) {
@@ -369,18 +539,31 @@ extern "C" fn on_code(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void
         // the run. +2: the run stops before the instruction after the next one (at most
         // one instruction late), as when this was a hook of its own called after the
         // counting hook.
-        Some(Site::Unmask) => st.budget = st.budget.min(st.instructions + 2),
+        // With nothing pending (pending state changes only at run boundaries and in
+        // `after_write`, which ends the run itself when an exception can be taken),
+        // unmasking lets nothing in: the run goes on.
+        Some(Site::Unmask) if st.scs.any_pending() && st.instructions + 2 < st.budget => {
+            st.budget = st.instructions + 2;
+            st.budget_why = Why::Unmask;
+        }
+        Some(Site::Unmask) => {}
     }
 }
 
 /// Ends the run before the current instruction, asleep, resuming at `pc`.
+///
+/// The PC is set by `run_until` after the run, not here: in Unicorn 2.0.1 a PC write
+/// from a hook restarts the translation loop and cancels a pending stop request
+/// (`quit_request` clears `stop_request`), so the core went on executing — the `b .`
+/// idle loop spun, one hook call per iteration, until the run's instruction budget
+/// ran out, and a WFI behaved as a NOP. Measured before this fix: 3.6 M of psu's
+/// 6.9 M instructions in 0.3 s were its `b .`, and every module's busy fraction read
+/// ≈ 0.5.
 fn sleep_at(uc: *mut uc_engine, st: &mut State, pc: u32) {
     st.wfi = true;
-    // SAFETY: `uc` is the engine calling the hook; PC writes in hooks restart there.
-    unsafe {
-        uc_reg_write(uc, REG_PC, (&pc as *const u32).cast());
-        uc_emu_stop(uc);
-    }
+    st.resume_pc = Some(pc);
+    // SAFETY: `uc` is the engine calling the hook.
+    unsafe { uc_emu_stop(uc) };
 }
 
 extern "C" fn on_intr(uc: *mut uc_engine, intno: u32, ud: *mut c_void) {
@@ -495,6 +678,10 @@ impl Mcu {
             base_instr: 0,
             instr_ps: 0.0,
             budget: 0,
+            stop_at: None,
+            resume_pc: None,
+            budget_why: Why::Until,
+            slices: Slices::default(),
             scs: Scs::default(),
             rcc: Rcc::default(),
             flash: Flash::default(),
@@ -658,12 +845,6 @@ impl Mcu {
         u32::from_le_bytes(b)
     }
 
-    fn mem_write_u32(&mut self, addr: u32, v: u32) {
-        let b = v.to_le_bytes();
-        // SAFETY: live engine, `b` is 4 readable bytes.
-        unsafe { uc_mem_write(self.uc, u64::from(addr), b.as_ptr().cast(), 4) };
-    }
-
     /// Reads emulated memory.
     pub fn read_mem(&self, addr: u32, len: usize) -> Vec<u8> {
         let mut b = vec![0u8; len];
@@ -773,61 +954,18 @@ impl Mcu {
         self.st.now()
     }
 
-    /// Interrupt lines of the peripherals into the NVIC (RM0008 §10.1.2, table 63).
+    /// Interrupt lines of the peripherals into the NVIC (`State::raise_lines`), and the
+    /// core's state for the slot probe when TIM2's line rose.
     fn raise_irqs(&mut self) {
-        let now = self.st.now();
-        let clk = self.st.rcc.tim2clk();
-        // TIM2, TIM3, TIM4: IRQ 28, 29, 30.
         let core = (
             self.reg(REG_PC),
             self.reg(REG_PRIMASK) & 1 != 0,
             self.reg(REG_BASEPRI) as u8,
         );
         let st = &mut self.st;
-        for (i, t) in st.tim.iter_mut().enumerate() {
-            t.sync(now, clk);
-            if i == 0 {
-                st.probe.timer_line(t.irq(), now);
-                let active = st.scs.active.last().copied().unwrap_or(0);
-                st.probe.core_at_rise(core.0, core.1, core.2, active);
-            }
-            if t.irq() {
-                st.scs.set_pending(28 + i);
-            }
-        }
-        let cyc = st.cycles();
-        st.scs.sync_systick(cyc);
-        let bit = now / st.bit_ps.max(1);
-        st.can.tick(bit);
-        let lines = st.can.irq_lines();
-        for (i, irq) in [
-            crate::bxcan::IRQ_TX,
-            crate::bxcan::IRQ_RX0,
-            crate::bxcan::IRQ_RX1,
-            crate::bxcan::IRQ_SCE,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            if lines.get(i) == Some(&true) {
-                st.scs.set_pending(irq);
-            }
-        }
-        // EXTI lines 0..4 have their own IRQs 6..10 (table 63).
-        for line in 0..5 {
-            if st.exti.pr & (1 << line) != 0 {
-                st.scs.set_pending(6 + line);
-            }
-        }
-        // USART1: IRQ 37; DMA1 channels 4 and 5: IRQ 14 and 15 (table 63).
-        if st.usart1.irq(now, st.rcc.pclk2()) {
-            st.scs.set_pending(37);
-        }
-        for (c, irq) in [(3, 14), (4, 15)] {
-            if st.dma1.irq(c) {
-                st.scs.set_pending(irq);
-            }
-        }
+        st.raise_lines();
+        let active = st.scs.active.last().copied().unwrap_or(0);
+        st.probe.core_at_rise(core.0, core.1, core.2, active);
     }
 
     /// Exception entry (ARMv7-M B1.5.6): stacks R0-R3, R12, LR, return address, xPSR on
@@ -853,10 +991,17 @@ impl Mcu {
             xpsr &= !(1 << 9);
         }
         sp -= 32;
-        for (i, v) in frame.iter().enumerate() {
-            self.mem_write_u32(sp + 4 * i as u32, *v);
+        // One write of the whole frame: each `uc_mem_write` costs Unicorn a translated-
+        // code invalidation check of the range (malloc/free of a page collection).
+        let mut bytes = [0u8; 32];
+        for (chunk, v) in bytes
+            .chunks_exact_mut(4)
+            .zip(frame.iter().copied().chain([xpsr | (1 << 24)]))
+        {
+            chunk.copy_from_slice(&v.to_le_bytes());
         }
-        self.mem_write_u32(sp + 28, xpsr | (1 << 24));
+        // SAFETY: live engine, `bytes` is 32 readable bytes.
+        unsafe { uc_mem_write(self.uc, u64::from(sp), bytes.as_ptr().cast(), 32) };
         self.set_reg(REG_SP, sp);
         // Return to thread mode on the main stack, or to handler mode when nested.
         let exc_return = if self.st.scs.active.is_empty() {
@@ -880,8 +1025,15 @@ impl Mcu {
     /// Exception return (B1.5.8): unstacks the frame and ends the active exception.
     fn exc_return(&mut self) {
         let sp = self.reg(REG_SP);
-        let v: Vec<u32> = (0..8).map(|i| self.mem_read_u32(sp + 4 * i)).collect();
-        let get = |i: usize| v.get(i).copied().unwrap_or(0);
+        let mut bytes = [0u8; 32];
+        // SAFETY: live engine, `bytes` is 32 writable bytes.
+        unsafe { uc_mem_read(self.uc, u64::from(sp), bytes.as_mut_ptr().cast(), 32) };
+        let get = |i: usize| {
+            bytes
+                .get(4 * i..4 * i + 4)
+                .and_then(|b| b.try_into().ok())
+                .map_or(0, u32::from_le_bytes)
+        };
         for (i, r) in [REG_R0, REG_R0 + 1, REG_R0 + 2, REG_R0 + 3, REG_R12, REG_LR]
             .iter()
             .enumerate()
@@ -923,27 +1075,7 @@ impl Mcu {
 
     /// The next time (ps) a peripheral changes an interrupt line by itself.
     pub fn next_event(&self) -> Option<u64> {
-        let st = &self.st;
-        let now = st.now();
-        let mut t: Option<u64> = None;
-        for tim in &st.tim {
-            if let Some(at) = tim.next_event(now, st.rcc.tim2clk()) {
-                t = Some(t.map_or(at, |x| x.min(at)));
-            }
-        }
-        let hz = st.rcc.hclk().max(1);
-        if let Some(c) = st.scs.systick_due_in() {
-            let at = now + c * PS / hz;
-            t = Some(t.map_or(at, |x| x.min(at)));
-        }
-        if let Some(b) = st.can.next_event() {
-            let at = b * st.bit_ps;
-            t = Some(t.map_or(at, |x| x.min(at)));
-        }
-        if let Some(d) = st.iwdg.deadline {
-            t = Some(t.map_or(d, |x| x.min(d)));
-        }
-        t
+        self.st.next_event()
     }
 
     /// Runs until emulated time `until` (ps), or a fault.
@@ -975,14 +1107,51 @@ impl Mcu {
                 self.st.asleep_ps += next - now;
                 continue;
             }
-            let horizon = self.next_event().unwrap_or(until).min(until);
+            let event = self.next_event().filter(|&e| e < until);
+            let horizon = event.unwrap_or(until);
             let left = horizon.saturating_sub(self.st.now());
-            let n = ((left as f64 / self.st.instr_ps.max(1.0)) as u64).clamp(1, CHUNK);
-            self.st.budget = self.st.instructions + n;
+            let n = (left as f64 / self.st.instr_ps.max(1.0)) as u64;
+            self.st.budget_why = match event {
+                _ if n > CHUNK => Why::Chunk,
+                Some(_) => Why::Event,
+                None => Why::Until,
+            };
+            // n instructions execute; the hook of the next one ends the run.
+            self.st.budget = self.st.instructions + n.clamp(1, CHUNK) + 1;
             self.st.scs.reschedule = false;
             let pc = self.reg(REG_PC);
             // SAFETY: live engine.
             let e = unsafe { uc_emu_start(self.uc, u64::from(pc | 1), 0xFFFF_FFFF, 0, 0) };
+            let sl = &mut self.st.slices;
+            if self.st.exc_return {
+                sl.exc_return += 1;
+            } else if self.st.wfi {
+                sl.sleep += 1;
+            } else if self.st.instructions >= self.st.budget {
+                match self.st.budget_why {
+                    Why::Event => sl.event += 1,
+                    Why::Until => sl.until += 1,
+                    Why::Chunk => sl.chunk += 1,
+                    Why::Unmask => sl.unmask += 1,
+                    Why::Replan => sl.replan += 1,
+                }
+            } else {
+                sl.other += 1;
+            }
+            // The instruction the run stopped at was counted by the hook but did not
+            // execute (the PC is still there): uncount it, so that time does not depend
+            // on where runs end. (Before, each run's end added one instruction of time.)
+            if self
+                .st
+                .stop_at
+                .take()
+                .is_some_and(|a| self.reg(REG_PC) & !1 == a & !1)
+            {
+                self.st.instructions -= 1;
+            }
+            if let Some(pc) = self.st.resume_pc.take() {
+                self.set_reg(REG_PC, pc & !1);
+            }
             if self.st.exc_return {
                 self.st.exc_return = false;
                 self.exc_return();

@@ -51,6 +51,11 @@ impl Default for SlotProbe {
 }
 
 impl SlotProbe {
+    /// The TIM2 line as last seen.
+    pub fn line(&self) -> bool {
+        self.line
+    }
+
     /// The TIM2 line is `high` at `now` (ps): a rising edge opens a boundary.
     pub fn timer_line(&mut self, high: bool, now: u64) {
         if high && !self.line {

@@ -55,6 +55,7 @@ pub fn json(bus: &Bus, seconds: f64, cpu_seconds: f64, logs: &[Vec<String>]) -> 
                     "addr": format!("{:#010x}", u.addr), "pc": format!("{:#010x}", u.pc),
                     "write": u.write, "time_us": u.time_ps / 1_000_000 })).collect::<Vec<_>>(),
                 "tec": m.st.can.tec,
+                "runs": runs_json(&m.st.slices),
                 "log": logs.get(i).cloned().unwrap_or_default(),
             })
         })
@@ -70,5 +71,15 @@ pub fn json(bus: &Bus, seconds: f64, cpu_seconds: f64, logs: &[Vec<String>]) -> 
         "frames": bus.log.len(),
         "modules": modules,
         "ids": ids,
+    })
+}
+
+/// Unicorn runs of one MCU by what ended them (docs/EMULATOR.md, "Figures": the cost of
+/// the emulation is mostly in starting and ending runs).
+fn runs_json(s: &crate::mcu::Slices) -> Value {
+    json!({
+        "total": s.event + s.until + s.chunk + s.unmask + s.replan + s.sleep + s.exc_return + s.other,
+        "event": s.event, "until": s.until, "chunk": s.chunk, "unmask": s.unmask,
+        "replan": s.replan, "sleep": s.sleep, "exc_return": s.exc_return, "other": s.other,
     })
 }

@@ -87,6 +87,18 @@ impl Scs {
         }
     }
 
+    /// Whether any exception is pending and enabled (whatever its priority): the only
+    /// case in which unmasking can let one in.
+    pub fn any_pending(&self) -> bool {
+        self.pendsv
+            || self.systick_pending
+            || self
+                .pending
+                .iter()
+                .zip(&self.enabled)
+                .any(|(&p, &e)| p && e)
+    }
+
     /// Whether IRQ `n` is pending.
     pub fn is_pending(&self, irq: usize) -> bool {
         self.pending.get(irq).copied().unwrap_or(false)

@@ -134,6 +134,22 @@ impl Usart {
         }
     }
 
+    /// The next time (ps) after `now` the interrupt line rises by itself: TXE (with
+    /// TXEIE) when TDR moves into the shift register, TC (with TCIE) when the shift
+    /// register empties (§27.3.2).
+    pub fn next_event(&self, now: u64, pclk2: u64) -> Option<u64> {
+        let byte = self.byte_ps(pclk2);
+        let txe_at = self.shift_end.saturating_sub(byte);
+        let mut t: Option<u64> = None;
+        if self.cr1 & (1 << 7) != 0 && now < txe_at {
+            t = Some(txe_at);
+        }
+        if self.cr1 & (1 << 6) != 0 && now < self.shift_end {
+            t = Some(t.map_or(self.shift_end, |x| x.min(self.shift_end)));
+        }
+        t
+    }
+
     /// The USART1 interrupt line (§27.4, figure 287): TXEIE, TCIE, RXNEIE (also ORE).
     pub fn irq(&self, now: u64, pclk2: u64) -> bool {
         let sr = self.sr(now, pclk2);
