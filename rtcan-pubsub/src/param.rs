@@ -419,7 +419,8 @@ pub const REQUEST_BYTES: usize = 8;
 pub const REPLY_BYTES: usize = 8;
 
 impl Request {
-    fn index(self) -> u16 {
+    /// The parameter index the request is about.
+    pub fn index(self) -> u16 {
         match self {
             Request::Get { index } | Request::Set { index, .. } | Request::List { index } => index,
         }
