@@ -17,9 +17,10 @@ use rtcan_host::monitor::View;
 
 /// Draws `v` on the whole of `f`; `title` names the bus.
 pub fn draw(f: &mut Frame, v: &View, title: &str) {
-    let [head, modules, topics, load] = Layout::vertical([
+    let [head, modules, stale, topics, load] = Layout::vertical([
         Constraint::Length(1),
         Constraint::Length(v.modules.len() as u16 + 3),
+        Constraint::Length(stale_rows(v)),
         Constraint::Min(3),
         Constraint::Length(3),
     ])
@@ -64,6 +65,27 @@ pub fn draw(f: &mut Frame, v: &View, title: &str) {
         .block(Block::bordered().title("modules")),
         modules,
     );
+    if !v.stale.is_empty() {
+        // A stale image is a fault to fix, not a figure: red, above the topics.
+        let lines: Vec<Line> = v
+            .stale
+            .iter()
+            .map(|r| {
+                Line::from(Span::styled(
+                    format!("{:#06x} {:>6} frames  {}", r.msg_id, r.frames, r.reason),
+                    Style::new().fg(Color::Red),
+                ))
+            })
+            .collect();
+        f.render_widget(
+            Paragraph::new(lines)
+                .wrap(ratatui::widgets::Wrap { trim: true })
+                .block(
+                    Block::bordered().title("stale images (frames under IDs robot.lock retired)"),
+                ),
+            stale,
+        );
+    }
     let rows = v.topics.iter().map(|t| {
         Row::new(vec![
             t.name.clone(),
@@ -113,9 +135,19 @@ pub fn draw(f: &mut Frame, v: &View, title: &str) {
     );
 }
 
+/// Height of the stale-images block: none without stale frames, else two lines a row
+/// (the reasons are long) and the border.
+fn stale_rows(v: &View) -> u16 {
+    if v.stale.is_empty() {
+        0
+    } else {
+        (2 * v.stale.len() + 2) as u16
+    }
+}
+
 /// Height that shows every row of `v`.
 fn rows_needed(v: &View) -> u16 {
-    (1 + v.modules.len() + 3 + v.topics.len() + 3 + 3) as u16
+    (1 + v.modules.len() + 3 + v.topics.len() + 3 + 3) as u16 + stale_rows(v)
 }
 
 /// `v` drawn on a `width`-column test backend, as text lines (trailing blanks cut).
@@ -188,7 +220,7 @@ impl Drop for Live {
 #[allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 mod tests {
     use super::*;
-    use rtcan_host::monitor::{ModuleRow, TopicRow};
+    use rtcan_host::monitor::{ModuleRow, StaleRow, TopicRow};
 
     fn view() -> View {
         View {
@@ -227,6 +259,7 @@ mod tests {
                 ("NRT", 0.5),
                 ("other", 0.0),
             ],
+            stale: Vec::new(),
         }
     }
 
@@ -262,5 +295,29 @@ mod tests {
         assert_eq!(buf.cell((49, 3)).unwrap().fg, Color::Green);
         assert_eq!(buf.cell((49, 4)).unwrap().symbol(), "N");
         assert_eq!(buf.cell((49, 4)).unwrap().fg, Color::Red);
+    }
+
+    #[test]
+    fn a_stale_image_is_a_red_block_above_the_topics() {
+        let mut v = view();
+        v.stale.push(StaleRow {
+            msg_id: 0x0145,
+            frames: 58,
+            reason: "retired ID of topic `encoder3`: rebuild and flash it".into(),
+        });
+        let text = screen_text(&v, "x", 80).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[6],
+            "┌stale images (frames under IDs robot.lock retired)────────────────────────────┐"
+        );
+        assert_eq!(
+            lines[7],
+            "│0x0145     58 frames  retired ID of topic `encoder3`: rebuild and flash it    │"
+        );
+        assert!(lines[10].starts_with("┌topics"), "{text}");
+        let mut t = Terminal::new(TestBackend::new(80, rows_needed(&v))).unwrap();
+        t.draw(|f| draw(f, &v, "x")).unwrap();
+        assert_eq!(t.backend().buffer().cell((1, 7)).unwrap().fg, Color::Red);
     }
 }

@@ -81,6 +81,19 @@ pub struct View {
     pub topics: Vec<TopicRow>,
     /// Share of the bus per class (sync, HRT, SRT, NRT, other), %.
     pub load: [(&'static str, f64); 5],
+    /// Frames under IDs robot.lock retired: images built before a topic changed.
+    pub stale: Vec<StaleRow>,
+}
+
+/// Frames under one retired ID (`Catalog::retired`): an image that must be rebuilt.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StaleRow {
+    /// The retired message ID.
+    pub msg_id: u16,
+    /// Frames seen under it.
+    pub frames: u64,
+    /// The topic it carried, what that topic is now, who to reflash.
+    pub reason: String,
 }
 
 /// Live figures of one bus.
@@ -91,6 +104,8 @@ pub struct Monitor {
     bitrate: u32,
     modules: BTreeMap<u8, ModuleSeen>,
     topics: Vec<TopicSeen>,
+    /// Frames per retired message ID.
+    stale: BTreeMap<u16, u64>,
     /// Bits per class: sync (HRT slot), HRT, SRT, NRT, unknown.
     bits: [u64; 5],
     frames: u64,
@@ -109,6 +124,7 @@ impl Monitor {
             bitrate,
             modules: BTreeMap::new(),
             topics: vec![TopicSeen::default(); cat.topics.len()],
+            stale: BTreeMap::new(),
             bits: [0; 5],
             frames: 0,
             first_ns: None,
@@ -133,7 +149,13 @@ impl Monitor {
                     Class::Srt => 2,
                     Class::Nrt => 3,
                 },
-                None => 4,
+                None => {
+                    let msg = id.msg_id().0;
+                    if cat.retired.iter().any(|r| r.msg_id == msg) {
+                        *self.stale.entry(msg).or_default() += 1;
+                    }
+                    4
+                }
             }
         };
         if let Some(b) = self.bits.get_mut(class) {
@@ -249,12 +271,22 @@ impl Monitor {
         for (slot, p) in load.iter_mut().zip(self.load_pct()) {
             slot.1 = p;
         }
+        let stale = self
+            .stale
+            .iter()
+            .map(|(&msg_id, &frames)| StaleRow {
+                msg_id,
+                frames,
+                reason: cat.stale_reason(msg_id).unwrap_or_default(),
+            })
+            .collect();
         View {
             time_s: now as f64 * 1e-9,
             frames: self.frames,
             modules,
             topics,
             load,
+            stale,
         }
     }
 
@@ -286,6 +318,12 @@ impl Monitor {
                 "{:<16} {:<5} {:>6} {:>9.1} {:>8.3}  {}",
                 t.name, t.class, t.count, t.rate_hz, t.xfer_ms, t.last
             );
+        }
+        if !v.stale.is_empty() {
+            let _ = writeln!(s, "\nSTALE IMAGES (frames under IDs robot.lock retired)");
+            for r in &v.stale {
+                let _ = writeln!(s, "{:#06x} {:>6}  {}", r.msg_id, r.frames, r.reason);
+            }
         }
         let _ = write!(s, "\nLOAD %  ");
         for (c, p) in v.load {

@@ -52,8 +52,66 @@ pub struct Lock {
     pub topics: BTreeMap<String, LockedTopic>,
     /// IDs of removed or re-laid-out topics: never handed out again.
     pub retired: BTreeSet<u16>,
+    /// What a retired ID carried, where the lock recorded it (`retired ID NAME LAYOUT`;
+    /// locks written before round 7 have bare IDs): the host tools name the topic of a
+    /// stale image's frame by it.
+    pub retired_topics: BTreeMap<u16, (String, String)>,
     /// Module name → filter banks in bank order.
     pub banks: BTreeMap<String, Vec<FilterBank>>,
+}
+
+/// A topic ID the lock retired, or that a plan made with the lock retires (a topic
+/// removed or re-laid out since): only an image built before that change still sends it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Retired {
+    /// The retired message ID.
+    pub msg_id: u16,
+    /// The topic that carried it (empty if the lock has the bare ID).
+    pub name: String,
+    /// Its wire layout then (empty if unknown).
+    pub layout: String,
+    /// The same topic in the plan: message ID and layout (`None`: removed).
+    pub now: Option<(u16, String)>,
+}
+
+/// The IDs an image built from an older robot.toml of `lock`'s history may still send and
+/// this plan's modules do not: the lock's retired IDs and the locked topics whose IDs the
+/// plan (`topics`, laid out as `layout_of(i)`) no longer uses, each with the topic it
+/// carried and that topic's ID and layout now.
+pub fn retired_in_plan(
+    lock: &Lock,
+    topics: &[(String, u16)],
+    layout_of: &dyn Fn(usize) -> String,
+) -> Vec<Retired> {
+    let mut out: BTreeMap<u16, (String, String)> = lock
+        .retired
+        .iter()
+        .map(|&id| {
+            (
+                id,
+                lock.retired_topics.get(&id).cloned().unwrap_or_default(),
+            )
+        })
+        .collect();
+    for t in lock.topics.values() {
+        if !topics.iter().any(|(_, id)| *id == t.msg_id) {
+            out.insert(t.msg_id, (t.name.clone(), t.layout.clone()));
+        }
+    }
+    out.into_iter()
+        .map(|(msg_id, (name, layout))| {
+            let now = topics
+                .iter()
+                .position(|(n, _)| !name.is_empty() && *n == name)
+                .and_then(|i| topics.get(i).map(|(_, id)| (*id, layout_of(i))));
+            Retired {
+                msg_id,
+                name,
+                layout,
+                now,
+            }
+        })
+        .collect()
 }
 
 /// Something the lock held that the new plan had to change.
@@ -182,13 +240,18 @@ pub fn parse(file: &str, text: &str) -> Result<Lock, Diagnostic> {
                     return Err(bad("topic locked twice"));
                 }
             }
-            ("retired", 2) => {
-                lock.retired.insert(
-                    num(1, 0xFFFF)
-                        .filter(|v| *v >= u64::from(FIRST_TOPIC_MSG_ID))
-                        .ok_or_else(|| bad("bad message ID (topics use 0x0140..=0xffff)"))?
-                        as u16,
-                );
+            ("retired", 2 | 4) => {
+                let id = num(1, 0xFFFF)
+                    .filter(|v| *v >= u64::from(FIRST_TOPIC_MSG_ID))
+                    .ok_or_else(|| bad("bad message ID (topics use 0x0140..=0xffff)"))?
+                    as u16;
+                if !lock.retired.insert(id) {
+                    return Err(bad("ID retired twice"));
+                }
+                if words.len() == 4 {
+                    lock.retired_topics
+                        .insert(id, (word(2).to_string(), word(3).to_string()));
+                }
             }
             ("bank", 5) => {
                 let a = num(3, 0x1FFF_FFFF).ok_or_else(|| bad("bad identifier"))? as u32;
@@ -245,16 +308,22 @@ pub fn render(model: &Model, plan: &Plan, prev: Option<&Lock>) -> String {
         }
         s.push('\n');
     }
-    let mut retired: BTreeSet<u16> = prev.map(|p| p.retired.clone()).unwrap_or_default();
-    if let Some(p) = prev {
-        for lt in p.topics.values() {
-            if !plan.topics.iter().any(|t| t.msg_id.0 == lt.msg_id) {
-                retired.insert(lt.msg_id);
-            }
-        }
-    }
+    // Each retired ID with the topic it carried, so the host tools can name the topic of
+    // a stale image's frame (`rtcan monitor`, `rtcan decode`).
+    let topics: Vec<(String, u16)> = plan
+        .topics
+        .iter()
+        .map(|t| (t.name.clone(), t.msg_id.0))
+        .collect();
+    let retired = prev.map_or_else(Vec::new, |p| {
+        retired_in_plan(p, &topics, &|_| String::new())
+    });
     for r in retired {
-        let _ = writeln!(s, "retired {r:#06x}");
+        let _ = if r.name.is_empty() {
+            writeln!(s, "retired {:#06x}", r.msg_id)
+        } else {
+            writeln!(s, "retired {:#06x} {} {}", r.msg_id, r.name, r.layout)
+        };
     }
     for m in &plan.modules {
         for b in &m.banks {

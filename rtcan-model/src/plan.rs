@@ -200,6 +200,10 @@ pub struct Plan {
     pub lineage: Option<u32>,
     /// What the lock held that this plan had to move, with reasons.
     pub moves: Vec<crate::lock::Move>,
+    /// IDs the lock retired or this plan retires, with the topic each carried: only an
+    /// image built from an older robot.toml still sends them, and the host tools name
+    /// that topic (`rtcan monitor` "STALE IMAGES", `rtcan decode`).
+    pub retired: Vec<crate::lock::Retired>,
     /// End-to-end chains with their bounds (`[chains]`; filled by `analyze`).
     pub chains: Vec<crate::chains::ChainBound>,
     /// Request/reply services (`[services]`); their topics are in `topics`.
@@ -715,6 +719,13 @@ pub fn build_locked(
         return None;
     }
     let admitted = admitted?;
+    let retired = lock.map_or_else(Vec::new, |l| {
+        let named: Vec<(String, u16)> = topics
+            .iter()
+            .map(|t| (t.name.clone(), t.msg_id.0))
+            .collect();
+        crate::lock::retired_in_plan(l, &named, &|i| crate::lock::layout(model, i))
+    });
     let mut plan = Plan {
         file: file.to_string(),
         bus: bus_plan(model, hyper, hyper_cycles),
@@ -728,6 +739,7 @@ pub fn build_locked(
         fingerprint: 0,
         bridge: model.bridge.clone(),
         lineage: lock.map(|l| l.lineage),
+        retired,
         moves,
         chains: Vec::new(),
         services: model.services.clone(),

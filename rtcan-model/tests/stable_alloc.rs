@@ -196,8 +196,12 @@ fn a_changed_layout_moves_the_id_and_reports_why() {
         lock::parse("robot.lock", &text).ok().as_ref(),
     );
     let old_e1 = plan.topic("encoder1").unwrap().msg_id.0;
+    // With the topic it carried and its layout then, for the host tools (stale images).
+    let then = lock::parse("robot.lock", &text).unwrap().topics["encoder1"]
+        .layout
+        .clone();
     assert!(
-        relock.contains(&format!("retired {old_e1:#06x}\n")),
+        relock.contains(&format!("retired {old_e1:#06x} encoder1 {then}\n")),
         "{relock}"
     );
 }

@@ -72,6 +72,37 @@ pub struct Catalog {
     pub topics: Vec<TopicDesc>,
     /// The robot's fingerprint: heartbeats carrying another one come from another robot.
     pub fingerprint: Option<u32>,
+    /// IDs robot.lock retired, with the topic each carried: a frame under one comes from
+    /// an image built before that topic changed (same lineage, so its heartbeat's
+    /// fingerprint matches); the decoder names the topic and its module.
+    pub retired: Vec<rtcan_model::lock::Retired>,
+}
+
+impl Catalog {
+    /// Why a frame of `msg_id`, which no topic of the robot has, is on the bus: the
+    /// retired topic it carried, what that topic is now and who publishes it.
+    pub fn stale_reason(&self, msg_id: u16) -> Option<String> {
+        let r = self.retired.iter().find(|r| r.msg_id == msg_id)?;
+        if r.name.is_empty() {
+            return Some(format!(
+                "retired message ID {msg_id:#06x} (robot.lock): an image built from an older robot.toml is on the bus"
+            ));
+        }
+        let now = match &r.now {
+            Some((id, layout)) => format!("now {id:#06x} {layout}"),
+            None => "now removed".into(),
+        };
+        let who = self
+            .topics
+            .iter()
+            .find(|t| t.name == r.name)
+            .and_then(|t| t.module)
+            .map_or(String::new(), |m| format!(" (its publisher is module {m})"));
+        Some(format!(
+            "retired ID of topic `{}` (then {}; {now}): an image built before that change is on the bus{who}; rebuild and flash it",
+            r.name, r.layout
+        ))
+    }
 }
 
 /// One decoded record.
@@ -127,6 +158,8 @@ pub struct DecodeCounts {
     pub unattributed: u64,
     /// Heartbeats carrying another fingerprint than the robot's.
     pub foreign_heartbeats: u64,
+    /// Frames under a retired ID (`Catalog::retired`): sent by a stale image.
+    pub stale: u64,
     /// Messages of senders with another fingerprint, not decoded.
     pub refused: u64,
     /// Messages of senders with another fingerprint, decoded because of `force`.
@@ -231,7 +264,14 @@ impl<'c> Decoder<'c> {
             });
         }
         let Some(&ti) = self.by_id.get(&id.msg_id().0) else {
-            return self.unattributed(t, id.raw(), "unknown message ID".into());
+            let why = match self.cat.stale_reason(id.msg_id().0) {
+                Some(why) => {
+                    self.counts.stale += 1;
+                    why
+                }
+                None => "unknown message ID".into(),
+            };
+            return self.unattributed(t, id.raw(), why);
         };
         let (Some(topic), Some(st), Some(buf), Some(n)) = (
             self.cat.topics.get(ti),
@@ -435,6 +475,7 @@ pub fn scenario_catalog(sc: &crate::run::Scenario) -> Catalog {
         slots_per_cycle: sc.bus().map_or(0, |b| b.slots_per_cycle),
         topics,
         fingerprint: sc.bus().map(|b| b.fingerprint),
+        retired: Vec::new(),
     }
 }
 
@@ -471,5 +512,6 @@ pub fn plan_catalog(plan: &rtcan_model::Plan) -> Catalog {
         slots_per_cycle: plan.bus.slots_per_cycle,
         topics,
         fingerprint: Some(plan.fingerprint),
+        retired: plan.retired.clone(),
     }
 }

@@ -17,6 +17,27 @@ pub struct Traffic {
     pub kind: GenKind,
 }
 
+/// The scenario of `new` with the modules named in `old_images` running the tables of
+/// `old` (images built from an older robot.toml of the same robot.lock), for the
+/// incremental-change tests: what an old image does on a bus of new ones.
+pub fn mixed_scenario(old: &Plan, new: &Plan, old_images: &[&str]) -> Result<Scenario, String> {
+    let mut sc = scenario(new, &[])?;
+    for (i, m) in new.modules.iter().enumerate() {
+        if old_images.contains(&m.name.as_str()) {
+            let oi = old
+                .modules
+                .iter()
+                .position(|o| o.name == m.name)
+                .ok_or_else(|| format!("module `{}` is not in the old plan", m.name))?;
+            let (Some(slot), Some(t)) = (sc.tables.get_mut(i), old.tables(oi)) else {
+                return Err(format!("no tables for module `{}`", m.name));
+            };
+            *slot = t;
+        }
+    }
+    Ok(sc)
+}
+
 /// Builds the scenario of `plan`; `traffic` overrides declared rates per topic. Topics
 /// without a rate and without an override send nothing.
 pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {

@@ -30,13 +30,7 @@ fn plans() -> (Plan, Plan) {
 /// Runs the new plan's scenario with the modules named in `old_images` on the old plan's
 /// tables.
 fn run_mixed(old: &Plan, new: &Plan, old_images: &[&str]) -> Run {
-    let mut sc = rtcan_sim::robot::scenario(new, &[]).unwrap();
-    for (i, m) in new.modules.iter().enumerate() {
-        if old_images.contains(&m.name.as_str()) {
-            let oi = old.modules.iter().position(|o| o.name == m.name).unwrap();
-            sc.tables[i] = old.tables(oi).unwrap();
-        }
-    }
+    let sc = rtcan_sim::robot::mixed_scenario(old, new, old_images).unwrap();
     let cfg = SimConfig {
         seconds: 0.5,
         ..SimConfig::default()
