@@ -89,7 +89,12 @@ pub fn scenario(plan: &Plan, traffic: &[Traffic]) -> Result<Scenario, String> {
             };
             let tx = k as u8;
             if topic.class == Class::Hrt {
-                g.push(Gen::hrt(tx));
+                // A fresh sample of the topic's full size in every slot (a multi-frame
+                // HRT topic sends all its fragments, as a node's would).
+                g.push(Gen {
+                    size: usize::from(topic.size),
+                    ..Gen::hrt(tx)
+                });
                 continue;
             }
             let kind = match kinds.get(topic.name.as_str()) {

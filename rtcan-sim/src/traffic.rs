@@ -75,7 +75,7 @@ pub struct Gen {
 pub const WARMUP_NS: Nanos = 30_000_000;
 
 impl Gen {
-    /// HRT generator.
+    /// HRT generator (8-byte samples; set `size` for another).
     pub fn hrt(tx: u8) -> Self {
         Gen {
             tx,
@@ -375,7 +375,14 @@ impl Host for TrafficHost {
         let seq = t.samples as u32;
         t.samples += 1;
         t.released.push((seq, self.now_local));
-        Some(self.alloc(8, seq, tx))
+        // The generator's size (the topic's, from robot::scenario); 8 bytes for a bare
+        // `Gen::hrt`, the paper benchmark's message size.
+        let size = self
+            .gens
+            .iter()
+            .find(|g| g.gen.tx == tx && g.gen.kind == GenKind::Hrt && g.gen.size > 0)
+            .map_or(8, |g| g.gen.size);
+        Some(self.alloc(size, seq, tx))
     }
 
     fn payload(&self, token: Token) -> &[u8] {
