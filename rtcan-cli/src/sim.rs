@@ -368,9 +368,10 @@ fn speed_line(s: &Speed) -> String {
     t
 }
 
-/// The plots (and `can0.log` when the run kept its wire instead of streaming it).
-fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
-    if !run.wire.is_empty() {
+/// The plots (and `can0.log` when the run kept its whole wire instead of streaming it;
+/// without `record_wire` it keeps only the chains' frames, `SimConfig::keep_msg_ids`).
+fn outputs(dir: &Path, sc: &Scenario, run: &Run, record_wire: bool) -> Result<(), String> {
+    if record_wire && !run.wire.is_empty() {
         write(dir, "can0.log", &candump::log(&run.wire, "can0"))?;
     }
     write_plot(
@@ -399,12 +400,10 @@ fn outputs(dir: &Path, sc: &Scenario, run: &Run) -> Result<(), String> {
 
 /// The triskar2 JSON object with a `services` member added (per service: calls,
 /// replies, timeouts, late, busy, server_absent, latency_max_ns, latency_mean_ns).
-fn with_services(json: &str, log: &rtcan_sim::triskar::services::ServiceLog) -> String {
+/// `json` (an object's text) with `key: value` appended (`value`: JSON text).
+fn with_field(json: &str, key: &str, value: &str) -> String {
     let body = json.trim_end().strip_suffix('}').unwrap_or(json);
-    format!(
-        "{body},\"services\":{}}}",
-        rtcan_sim::triskar::services::json(log)
-    )
+    format!("{body},\"{key}\":{value}}}")
 }
 
 fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
@@ -451,7 +450,7 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
             if let Some(dir) = &a.out {
                 let runs = &comparison.runs;
                 if let Some(ours) = runs.iter().find(|r| r.policy == PolicyKind::Ours.name()) {
-                    outputs(dir, scenario, ours)?;
+                    outputs(dir, scenario, ours, cfg.record_wire)?;
                 }
                 for r in runs.iter().filter(|r| r.policy != PolicyKind::Ours.name()) {
                     write_plot(
@@ -484,6 +483,7 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
             run,
             speed,
             notes,
+            chains,
         } => {
             for n in notes {
                 eprintln!("note: {}", n.replace('\n', "\nnote: "));
@@ -494,20 +494,22 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
                     "seconds": cfg.seconds,
                     "seed": cfg.seed,
                     "run": report::run_value(run),
+                    "chains": rtcan_sim::chains::json(chains),
                     "speed_x_real_time": speed.x_real_time(),
                 });
                 emit(&format!("{v}\n"));
             } else {
                 emit(&format!(
-                    "{file}: {} s simulated, seed {}\n\n{}{}\n",
+                    "{file}: {} s simulated, seed {}\n\n{}{}{}\n",
                     cfg.seconds,
                     cfg.seed,
                     report::text(run),
+                    rtcan_sim::chains::text(chains),
                     speed_line(speed)
                 ));
             }
             if let Some(dir) = &a.out {
-                outputs(dir, scenario, run)?;
+                outputs(dir, scenario, run, cfg.record_wire)?;
                 write(dir, "report.json", &report::run_json(run))?;
             }
         }
@@ -518,23 +520,33 @@ fn print_and_write(a: &Parsed, rep: &Report) -> Result<(), String> {
             cfg,
             speed,
             services,
+            chains,
         } => {
             let x = speed.x_real_time();
-            let json = with_services(&triskar_report::triskar_json(result, x), services);
+            let json = with_field(
+                &with_field(
+                    &triskar_report::triskar_json(result, x),
+                    "services",
+                    &rtcan_sim::triskar::services::json(services),
+                ),
+                "chains",
+                &rtcan_sim::chains::json(chains).to_string(),
+            );
             if a.json {
                 emit(&format!("{json}\n"));
             } else {
                 emit(&format!(
-                    "triskar2 on {file}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n\n{}\n{}\n{}\n",
+                    "triskar2 on {file}: {} s simulated, seed {}, 6 modules on one bus (generated engines, ModuleHosts and node code)\n\n{}\n{}\n{}{}\n",
                     cfg.seconds,
                     cfg.seed,
                     triskar_report::triskar_text(result),
                     rtcan_sim::triskar::services::text(services),
+                    rtcan_sim::chains::text(chains),
                     speed_line(speed)
                 ));
             }
             if let Some(dir) = &a.out {
-                outputs(dir, scenario, &result.run)?;
+                outputs(dir, scenario, &result.run, cfg.record_wire)?;
                 write_plot(dir, "path", &triskar_report::path_plot(result))?;
                 write(dir, "report.json", &json)?;
             }

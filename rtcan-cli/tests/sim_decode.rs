@@ -308,3 +308,28 @@ fn decode_reads_overlong_lines_in_bounded_pieces() {
     // 40 960 bytes = 10 pieces of 4 096; the newline after them ends an empty line.
     assert!(out.contains(", 10 malformed lines"), "{out}");
 }
+
+#[test]
+fn sim_measures_the_chains_beside_their_build_time_bound() {
+    let plan = rtcan_model::Robot::load(root().join("robot.toml")).unwrap();
+    let (code, out, err) = rtcan(&["sim", "--seconds", "1", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let chains = v["chains"].as_array().unwrap();
+    assert_eq!(chains.len(), plan.chains.len());
+    for (c, decl) in chains.iter().zip(&plan.chains) {
+        assert_eq!(c["name"], decl.name.as_str());
+        assert_eq!(c["bound_ns"].as_u64(), decl.bound_ns);
+        assert_eq!(c["budget_ns"].as_u64(), Some(decl.budget_ns));
+        // Measured on the node code's traffic, from the wire the run kept for them only.
+        let worst = c["worst_ns"].as_u64().unwrap();
+        assert!(c["samples"].as_u64().unwrap() > 20, "{c}");
+        assert!(worst <= decl.bound_ns.unwrap(), "{c}");
+        assert!(worst >= 1_000_000, "{c}");
+    }
+    let (code, out, _) = rtcan(&["sim", "--seconds", "1"]);
+    assert_eq!(code, 0);
+    assert!(out.contains(
+        "end-to-end chains (bound from robot.toml at build time; worst measured on the wire):\n  odometry_feedback    bound 45.666 ms, budget 50 ms, measured worst "
+    ), "{out}");
+}

@@ -12,6 +12,7 @@
 use crate::bus::WireFrame;
 use rtcan_core::{Class, Nanos};
 use rtcan_model::Plan;
+use std::fmt::Write as _;
 
 /// One chain: bound and measured worst case.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -124,7 +125,69 @@ pub fn measure(plan: &Plan, wire: &[WireFrame]) -> Vec<ChainMeasure> {
         .collect()
 }
 
+/// Message IDs of every topic on a chain of `plan`: what a run must keep of its wire for
+/// `measure` (`SimConfig::keep_msg_ids`).
+pub fn msg_ids(plan: &Plan) -> Vec<u16> {
+    let mut ids: Vec<u16> = plan
+        .chains
+        .iter()
+        .flat_map(|c| c.path.iter())
+        .filter_map(|t| plan.topics.get(*t).map(|x| x.msg_id.0))
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    ids
+}
+
 /// Complete messages of topic `t` on the wire (for reports and tests).
 pub fn message_count(plan: &Plan, t: usize, wire: &[WireFrame]) -> usize {
     messages(plan, t, wire).len()
+}
+
+fn ms(ns: u64) -> String {
+    rtcan_model::units::fmt_ns(ns as f64)
+}
+
+/// The chains as `rtcan sim` prints them: one line each, bound and budget from the build
+/// (`rtcan check`), the worst measured on this run's wire beside them. Empty without chains.
+pub fn text(chains: &[ChainMeasure]) -> String {
+    if chains.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "end-to-end chains (bound from robot.toml at build time; worst measured on the wire):\n",
+    );
+    for c in chains {
+        let bound = c.bound_ns.map_or("none".to_string(), ms);
+        let worst = match c.worst_ns {
+            Some(w) => format!("{} over {} samples", ms(w), c.samples),
+            None => "not traced (a hop off the bus, NRT, or no message)".into(),
+        };
+        let _ = writeln!(
+            s,
+            "  {:<20} bound {bound}, budget {}, measured worst {worst}",
+            c.name,
+            ms(c.budget_ns)
+        );
+    }
+    s
+}
+
+/// The chains as JSON (`rtcan sim --json` field `chains`): times in ns, `null` when
+/// unbounded or not traced.
+pub fn json(chains: &[ChainMeasure]) -> serde_json::Value {
+    serde_json::Value::Array(
+        chains
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "name": c.name,
+                    "bound_ns": c.bound_ns,
+                    "budget_ns": c.budget_ns,
+                    "worst_ns": c.worst_ns,
+                    "samples": c.samples,
+                })
+            })
+            .collect(),
+    )
 }

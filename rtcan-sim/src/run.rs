@@ -36,6 +36,10 @@ pub struct SimConfig {
     pub record_wire: bool,
     /// Write the wire log as a candump file while running (memory stays bounded).
     pub wire_log: Option<std::path::PathBuf>,
+    /// Without `record_wire`, still keep the frames of these message IDs in `Run::wire`
+    /// (the end-to-end chains' topics, `chains::measure`: memory grows with their
+    /// traffic only).
+    pub keep_msg_ids: Vec<u16>,
     /// Modelled CPU of every module (`None`: handlers take no time but
     /// `irq_latency_ns`; with a model the latency comes from it, `cpu.rs`).
     pub cpu: Option<crate::cpu::CpuModel>,
@@ -58,6 +62,7 @@ impl Default for SimConfig {
             drift_ppm: 50.0,
             record_wire: true,
             wire_log: None,
+            keep_msg_ids: Vec::new(),
             cpu: None,
             eof_error_rate: 0.0,
             faults: Vec::new(),
@@ -66,6 +71,20 @@ impl Default for SimConfig {
 }
 
 impl SimConfig {
+    /// Moves what the run keeps of `fresh` (the bus's latest frames) to `kept`: all with
+    /// `record_wire`, else the frames of `keep_msg_ids`.
+    pub fn keep_wire(&self, kept: &mut Vec<WireFrame>, fresh: &mut Vec<WireFrame>) {
+        if self.record_wire {
+            kept.append(fresh);
+        } else {
+            kept.extend(
+                fresh
+                    .drain(..)
+                    .filter(|w| self.keep_msg_ids.contains(&w.frame.id().msg_id().0)),
+            );
+        }
+    }
+
     /// Interrupt latency the bus adds: 0 with a CPU model (it models the entry itself).
     pub fn node_irq_latency_ns(&self) -> Nanos {
         if self.cpu.is_some() {
@@ -219,7 +238,7 @@ pub fn run_ideal(sc: &Scenario, cfg: &SimConfig, engine_run: &Run) -> Run {
     let mut meter = Meter::new(&sc.topics, window(cfg), bit_ns);
     let mut wire = Vec::new();
     ideal::schedule(sc, cfg.seed, cfg.end_ns(), &mut meter, |w| {
-        if cfg.record_wire {
+        if cfg.record_wire || cfg.keep_msg_ids.contains(&w.frame.id().msg_id().0) {
             wire.push(*w);
         }
     });
@@ -340,11 +359,7 @@ fn run_bus<'t, M: Module>(
             }
             _ => 0,
         };
-        if cfg.record_wire {
-            kept.append(&mut bus.wire);
-        } else {
-            bus.wire.clear();
-        }
+        cfg.keep_wire(&mut kept, &mut bus.wire);
         meter.expire(t);
     }
     if let Some((mut out, p)) = log {

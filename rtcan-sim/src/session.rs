@@ -172,6 +172,8 @@ pub enum Report {
         speed: Speed,
         /// Notes for the user (why this scenario ran).
         notes: Vec<String>,
+        /// robot.toml's end-to-end chains measured on the run's wire.
+        chains: Vec<crate::chains::ChainMeasure>,
     },
     /// The fault campaign (`campaign::cases`), one row per case.
     Campaign {
@@ -189,11 +191,13 @@ pub enum Report {
         /// Its tables and topics (for the outputs).
         scenario: Scenario,
         /// Seconds and seed actually run.
-        cfg: SimConfig,
+        cfg: Box<SimConfig>,
         /// Speed.
         speed: Speed,
         /// The `proximity_read` service: the gateway called it at its declared rate.
         services: Box<crate::triskar::services::ServiceLog>,
+        /// robot.toml's end-to-end chains measured on the run's wire (node code included).
+        chains: Vec<crate::chains::ChainMeasure>,
     },
 }
 
@@ -209,15 +213,21 @@ fn run_plan(
 ) -> Result<Report, String> {
     let mut scenario = robot::scenario(plan, traffic)?;
     robot::scale_load(&mut scenario, req.cfg.load);
+    let cfg = SimConfig {
+        keep_msg_ids: crate::chains::msg_ids(plan),
+        ..req.cfg.clone()
+    };
     let (run, speed) = timed(req.cfg.seconds, || {
-        run_engine(&scenario, &req.cfg, PolicyKind::Ours, Policy::OURS)
+        run_engine(&scenario, &cfg, PolicyKind::Ours, Policy::OURS)
     })?;
+    let chains = crate::chains::measure(plan, &run.wire);
     Ok(Report::Robot {
         file: plan.file.clone(),
         scenario,
         run: Box::new(run),
         speed,
         notes,
+        chains,
     })
 }
 
@@ -382,16 +392,19 @@ pub fn run(req: &Request, progress: &mut dyn FnMut(usize, usize)) -> Result<Repo
             if !req.seconds_given {
                 cfg.sim.seconds = TriskarConfig::default().sim.seconds;
             }
+            cfg.sim.keep_msg_ids = crate::chains::msg_ids(&plan);
             let script = triskar::services::ServiceScript::from_plan(&plan);
             let ((result, services), speed) = timed(cfg.sim.seconds, || {
                 triskar::run_with_services(&plan, &cfg, &script)
             })?;
             let scenario = robot::scenario(&plan, &[])?;
+            let chains = crate::chains::measure(&plan, &result.run.wire);
             Ok(Report::Triskar {
+                chains,
                 file: plan.file.clone(),
                 result: Box::new(result),
                 scenario,
-                cfg: cfg.sim,
+                cfg: Box::new(cfg.sim),
                 speed,
                 services: Box::new(services),
             })

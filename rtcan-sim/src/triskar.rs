@@ -634,11 +634,7 @@ fn simulate(
             crate::candump::write(out, &bus.wire, "can0")
                 .map_err(|e| format!("{}: {e}", p.display()))?;
         }
-        if cfg.sim.record_wire {
-            kept.append(&mut bus.wire);
-        } else {
-            bus.wire.clear();
-        }
+        cfg.sim.keep_wire(&mut kept, &mut bus.wire);
     }
     if let Some((mut out, p)) = log {
         std::io::Write::flush(&mut out).map_err(|e| format!("{}: {e}", p.display()))?;
