@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$PWD/target}"
 QEMU=(qemu-system-arm -cpu cortex-m3 -machine lm3s6965evb -nographic
       -semihosting-config enable=on,target=native)
-TESTS=(bus_exchange pubsub_exchange param_exchange)
+TESTS=(bus_exchange pubsub_exchange param_exchange ceiling)
 BENCHES=(bench bench_engine pubsub_bench bench_paths)
 
 cargo build --release -p rtcan-board-qemu --bins
