@@ -11,8 +11,8 @@ use rtcan_board_common::ceiling::basepri_of;
 /// may enter critical sections, the CAN interrupts and the slot timer above it may not.
 pub const PROTOCOL_PRIORITY: u8 = 2;
 
-/// Priority bits the STM32F103's NVIC implements.
-pub const NVIC_PRIO_BITS: u8 = 4;
+/// Priority bits the STM32F103's NVIC implements (4; the PAC's value, which RTIC uses).
+pub const NVIC_PRIO_BITS: u8 = stm32f1xx_hal::pac::NVIC_PRIO_BITS;
 
 /// The ceiling as a BASEPRI value (0xE0 for logical 2).
 pub const CEILING: u8 = basepri_of(PROTOCOL_PRIORITY, NVIC_PRIO_BITS);
