@@ -2,7 +2,7 @@
 # Issue 14's moved-node test (R2P §5.2): the variant is the workspace robot.toml with the
 # `kinematics` node on motor2 instead of motor1 and `odometry` on motor3 instead of motor2
 # (motor2 with its controller, odometry and kinematics is a 43 556 B image, over the
-# 40 KiB budget; motor3 has room), derived here from robot.toml so it never drifts from
+# 40 KiB budget of round 6 before supervision; motor3 has room), derived here from robot.toml so it never drifts from
 # it (target/tmp/triskar2-moved.toml). With RTCAN_ROBOT
 # pointing at it, the unchanged Triskar2 node code (examples/triskar2/nodes: the module
 # apps are generated from robot.toml's placement by its build.rs)

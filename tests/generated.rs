@@ -215,20 +215,22 @@ fn module_tables_equal_the_plan_and_the_macro_output() {
         triskar::motor2::TABLES.calendar,
         robot::motor2::TABLES.calendar
     );
-    // Engine sizes: motor1 receives `velocity` (12 B) only; the gateway receives
-    // odometry (24), proximity (8), battery (5), log (32) and the `proximity_read`
-    // service's reply frames (5: call number + sensor + range).
+    // Engine sizes: motor1 receives `velocity` (12 B), and as the backup master the
+    // five other modules' health (8 B each); the gateway receives odometry (24),
+    // proximity (8), battery (5), log (32), the `proximity_read` service's reply frames
+    // (5: call number + sensor + range) and the five other modules' health (robot.toml
+    // `on_missing`). No module receives a module table: only the host reads it.
     assert_eq!(
         (robot::motor1::RX_COUNT, robot::motor1::ARENA_BYTES),
-        (1, 12)
+        (1 + 5, 12 + 5 * 8)
     );
-    assert_eq!(robot::gateway::RX_COUNT, 5);
-    assert_eq!(robot::gateway::ARENA_BYTES, 24 + 8 + 5 + 32 + 5);
+    assert_eq!(robot::gateway::RX_COUNT, 5 + 5);
+    assert_eq!(robot::gateway::ARENA_BYTES, 24 + 8 + 5 + 32 + 5 + 5 * 8);
     // The gateway sends proximity_read requests (SRT, queue of in_flight = 2) besides
-    // teleop (queue 2) and its heartbeat.
-    assert_eq!(robot::gateway::QUEUE_CAPACITY, 1 + 2 + 2);
-    // psu sends battery and log (NRT, queues 1 and 4) and its heartbeat.
-    assert_eq!(robot::psu::QUEUE_CAPACITY, 1 + 1 + 4);
+    // teleop (queue 2), its heartbeat, its health and its module table (NRT, queue 1).
+    assert_eq!(robot::gateway::QUEUE_CAPACITY, 1 + 2 + 2 + 1 + 1);
+    // psu sends battery and log (NRT, queues 1 and 4), its heartbeat and its health.
+    assert_eq!(robot::psu::QUEUE_CAPACITY, 1 + 1 + 4 + 1);
     assert_eq!(
         (robot::gateway::IS_MASTER, robot::psu::IS_MASTER),
         (true, false)

@@ -1,4 +1,6 @@
 //! `rtcan echo TOPIC [--json]`: every message of one topic as it arrives on the bus.
+//! `module_state` names the module tables of a supervised robot, whichever module
+//! publishes them (`module_state_<sync master>`, docs/SERVICES.md §1).
 use std::io::Write as _;
 
 use rtcan_host::value::to_json;
@@ -32,14 +34,15 @@ pub fn run(a: Args) -> i32 {
 
 fn echo(la: &LinkArgs, topic: &str, json: bool) -> Result<(), String> {
     let (plan, cat) = la.robot()?;
-    let Some(ti) = cat.topics.iter().position(|t| t.name == topic) else {
+    let wanted = wanted(&plan, &cat, topic);
+    if wanted.is_empty() {
         let names: Vec<&str> = cat.topics.iter().map(|t| t.name.as_str()).collect();
         return Err(format!(
             "no topic `{topic}` on the bus of {}; its topics: {}",
             plan.file,
             names.join(", ")
         ));
-    };
+    }
     let mut link = la.open(&plan)?;
     let end = la.end_ns(link.now_ns());
     let mut dec = Decoder::new(&cat);
@@ -64,15 +67,15 @@ fn echo(la: &LinkArgs, topic: &str, json: bool) -> Result<(), String> {
             else {
                 continue;
             };
-            if *t != ti {
+            if !wanted.contains(t) {
                 continue;
             }
             seen += 1;
             let line = if json {
-                let tp = cat.topics.get(ti).ok_or("topic vanished")?;
+                let tp = cat.topics.get(*t).ok_or("topic vanished")?;
                 serde_json::json!({
                     "time": *time_ns as f64 * 1e-9,
-                    "topic": topic,
+                    "topic": tp.name,
                     "value": to_json(tp, payload),
                 })
                 .to_string()
@@ -86,4 +89,23 @@ fn echo(la: &LinkArgs, topic: &str, json: bool) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Catalog indices of the topics `name` names: the topic of that name, or for
+/// `module_state` on a supervised robot every module table topic.
+fn wanted(plan: &rtcan_model::Plan, cat: &rtcan_sim::decode::Catalog, name: &str) -> Vec<usize> {
+    let family: Vec<&str> = match (&plan.module_state, name) {
+        (Some(s), rtcan_model::module_state::FAMILY) => s
+            .tables
+            .iter()
+            .filter_map(|&(_, t)| plan.topics.get(t).map(|x| x.name.as_str()))
+            .collect(),
+        _ => vec![name],
+    };
+    cat.topics
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| family.contains(&t.name.as_str()))
+        .map(|(i, _)| i)
+        .collect()
 }

@@ -12,6 +12,7 @@ mod emulate;
 mod flash;
 mod link_args;
 mod log_epoch;
+mod module_table;
 mod monitor;
 mod monitor_tui;
 mod new;

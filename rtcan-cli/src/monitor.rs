@@ -55,8 +55,17 @@ fn title(la: &LinkArgs) -> String {
 fn monitor(la: &LinkArgs, once: bool, screen: bool, every: Duration) -> Result<(), String> {
     let title = title(la);
     let (plan, cat) = la.robot()?;
-    let names = plan.modules.iter().map(|m| m.name.clone()).collect();
-    let mut mon = Monitor::new(&cat, names, plan.bus.bitrate);
+    let names: Vec<String> = plan.modules.iter().map(|m| m.name.clone()).collect();
+    let mut mon = Monitor::new(&cat, names.clone(), plan.bus.bitrate);
+    // A supervised robot's module tables (`module_state_<module>`): the last one is shown.
+    let tables: Vec<usize> = plan.module_state.as_ref().map_or_else(Vec::new, |s| {
+        s.tables
+            .iter()
+            .filter_map(|&(_, t)| plan.topics.get(t))
+            .filter_map(|t| cat.topics.iter().position(|c| c.name == t.name))
+            .collect()
+    });
+    let mut table = None;
     let mut link = la.open(&plan)?;
     let end = la.end_ns(link.now_ns());
     let mut dec = Decoder::new(&cat);
@@ -77,6 +86,22 @@ fn monitor(la: &LinkArgs, once: bool, screen: bool, every: Duration) -> Result<(
             if let Some(d) = dec.push(&entry(&s)) {
                 messages += 1;
                 mon.record(&d, s.time_ns);
+                if let rtcan_sim::decode::Decoded::Message {
+                    time_ns,
+                    topic,
+                    payload,
+                    ..
+                } = &d
+                {
+                    if let Some(tp) = tables
+                        .contains(topic)
+                        .then(|| cat.topics.get(*topic))
+                        .flatten()
+                    {
+                        let v = rtcan_host::value::to_json(tp, payload);
+                        table = crate::module_table::from_json(&v, &names, *time_ns).or(table);
+                    }
+                }
             }
         }
         if let Some(l) = live.as_mut() {
@@ -105,6 +130,9 @@ fn monitor(la: &LinkArgs, once: bool, screen: bool, every: Duration) -> Result<(
         );
     } else {
         print!("{}", mon.render(&cat));
+    }
+    if let Some(t) = &table {
+        print!("{}", crate::module_table::render(t));
     }
     Ok(())
 }

@@ -41,7 +41,9 @@ fn a_zenoh_peer_in_another_process_sees_and_drives_the_simulated_robot() {
     let mut ready = String::new();
     out.read_line(&mut ready).unwrap();
     assert!(
-        ready.starts_with("bridge ready: 11 topics on rtcan/triskar2/*")
+        // 11 declared and service topics, and the 8 module-state topics of the supervised
+        // Triskar2 (six `health_<m>`, two `module_state_<m>`).
+        ready.starts_with("bridge ready: 19 topics on rtcan/triskar2/*")
             && ready.contains("writable: teleop"),
         "{ready}"
     );

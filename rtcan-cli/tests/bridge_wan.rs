@@ -74,12 +74,13 @@ fn two_robots_exchange_declared_topics_through_a_router() {
     let router = session("router", "listen/endpoints", &endpoint);
     let (leader, leader_out, lh) = bridge("robot.toml", &endpoint);
     assert!(
-        lh[0].starts_with("bridge ready: 11 topics on rtcan/triskar2/*"),
+        // With the 8 module-state topics of the supervised Triskar2.
+        lh[0].starts_with("bridge ready: 19 topics on rtcan/triskar2/*"),
         "{lh:?}"
     );
     let (follower, follower_out, fh) = bridge("robots/triskar2_follower.toml", &endpoint);
     assert!(
-        fh[0].starts_with("bridge ready: 11 topics on rtcan/follower/*")
+        fh[0].starts_with("bridge ready: 19 topics on rtcan/follower/*")
             && fh[0].ends_with("writable: teleop"),
         "{fh:?}"
     );

@@ -48,7 +48,8 @@ fn dbc_of_the_workspace_robot() {
     assert_eq!(code, 0, "{err}");
     let text = std::fs::read_to_string(&file).unwrap();
     // The fixed-ID messages: single-frame HRT (laxity 0) and NRT (laxity 63) topics on
-    // the bus, and the six heartbeats. ID = laxity << 23 | msg << 7, bit 31 = extended.
+    // the bus (the modules' health among them: Triskar2 is supervised), and the six
+    // heartbeats. ID = laxity << 23 | msg << 7, bit 31 = extended.
     let bo: Vec<&str> = text.lines().filter(|l| l.starts_with("BO_ ")).collect();
     let names: Vec<&str> = bo
         .iter()
@@ -61,6 +62,12 @@ fn dbc_of_the_workspace_robot() {
             "encoder3:",
             "proximity:",
             "battery:",
+            "health_gateway:",
+            "health_motor1:",
+            "health_motor2:",
+            "health_motor3:",
+            "health_proximity:",
+            "health_psu:",
             "heartbeat_gateway:",
             "heartbeat_motor1:",
             "heartbeat_motor2:",
@@ -79,6 +86,15 @@ fn dbc_of_the_workspace_robot() {
         "{text}"
     );
     assert!(text.contains(" SG_ range_mm_3 : 48|16@1+ (1,0) [0|65535] \"\" "));
+    // The gateway's health: NRT, message 0x153 (after every declared and service topic).
+    assert!(
+        text.contains(&format!(
+            "BO_ {} health_gateway: 8 gateway\n",
+            0x9F80_A980u32
+        )),
+        "{text}"
+    );
+    assert!(text.contains(" SG_ deadline_missed : 48|16@1+ (1,0) [0|65535] \"\" "));
     if !have("python3", &["-c", "import cantools"]) {
         tool_missing(
             "cantools",
@@ -289,7 +305,7 @@ fn monitor_screen_shows_the_live_view_as_text() {
     {
         let row = lines[3 + k].trim_end_matches([' ', '│']);
         assert!(row.starts_with(&format!("│{m:<12} {k}")), "{row}");
-        assert!(row.ends_with("0x006d9166   yes"), "{row}");
+        assert!(row.ends_with("0x17f0eebf   yes"), "{row}");
     }
     let wheel = lines
         .iter()

@@ -61,23 +61,56 @@ fn update_lock_then_add_a_module() {
         .iter()
         .map(|c| c["module"].as_str().unwrap())
         .collect();
-    assert_eq!(changed, ["gateway", "imu"]);
-    assert_eq!(v["moves"].as_array().unwrap().len(), 1, "{}", v["moves"]);
-    assert_eq!(v["moves"][0]["reason"], "now receives `imu_rate`");
+    // Triskar2 is supervised (`on_missing`): the sync-capable gateway and motor1 also
+    // receive the new module's health, and the module tables get a row more (their
+    // layout changes, so their IDs move).
+    assert_eq!(changed, ["gateway", "motor1", "imu"]);
+    let moves: Vec<(&str, &str, &str)> = v["moves"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            (
+                m["subject"].as_str().unwrap(),
+                m["what"].as_str().unwrap(),
+                m["to"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        moves,
+        [
+            ("module_state_gateway", "msg_id", "0x0156"),
+            ("module_state_motor1", "msg_id", "0x0157"),
+            ("gateway", "filters", "7 banks"),
+            ("motor1", "filters", "5 banks"),
+        ],
+        "{}",
+        v["moves"]
+    );
+    assert_eq!(v["moves"][2]["reason"], "now receives `imu_rate`");
+    assert_eq!(v["moves"][3]["reason"], "now receives `health_imu`");
     assert_eq!(v["chains"][0]["name"], "odometry_feedback");
     assert_eq!(v["chains"][0]["budget_ns"], 50_000_000);
-    // Recording the edit keeps every locked line and retires nothing.
+    // Recording the edit keeps every other locked line and retires the module tables'
+    // old IDs (moved with their layout).
     let (code, _, _) = rtcan(&dir, &["check", "robot.toml", "--update-lock"]);
     assert_eq!(code, 0);
     let relock = std::fs::read_to_string(dir.join("robot.lock")).unwrap();
     for l in lock
         .lines()
         .filter(|l| l.starts_with("topic") || l.starts_with("lineage"))
+        .filter(|l| !l.starts_with("topic module_state_"))
     {
         assert!(relock.contains(l), "{l}");
     }
     assert!(relock.contains("topic imu_rate "));
-    assert!(!relock.contains("retired"));
+    assert!(relock.contains("topic module_state_gateway 0x0156 "));
+    let retired: Vec<&str> = relock
+        .lines()
+        .filter(|l| l.starts_with("retired"))
+        .collect();
+    assert_eq!(retired, ["retired 0x0150", "retired 0x0151"]);
     // A damaged lock is refused with its line.
     std::fs::write(
         dir.join("robot.lock"),

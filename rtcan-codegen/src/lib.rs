@@ -6,6 +6,7 @@
 //! - one struct per message type, implementing `rtcan::pubsub::Message`;
 //! - `topics::NAME: rtcan::TopicInfo` for every topic;
 //! - `BUS`, `FINGERPRINT`, `MASTER_MASKS`, `MASTER`;
+//! - `supervision::RULES` (robot.toml `on_missing`) and the heartbeat period;
 //! - `link::NAME` numbers and `link::TOPICS` of the gateway's serial link;
 //! - `pub mod <module>` per module: tables, filters, engine sizes, topic statics, typed
 //!   handles per node and the `ModuleHost` glue;
@@ -33,6 +34,7 @@ mod params;
 mod placement;
 pub mod scaffold;
 mod services;
+mod supervision;
 mod tables;
 
 use proc_macro2::TokenStream;
@@ -62,6 +64,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
     let bus = tables::bus(plan);
     let link = link::link(plan);
     let placement = placement::placement(plan);
+    let supervision = supervision::supervision(plan);
     let modules = plan
         .modules
         .iter()
@@ -73,6 +76,7 @@ pub fn generate(plan: &Plan, opts: &Options) -> TokenStream {
         #topics
         #bus
         #link
+        #supervision
         #(#modules)*
         #placement
         /// Every module's statics back to power-on (`<module>::reset`).

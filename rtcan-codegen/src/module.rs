@@ -334,6 +334,7 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
     let queue = lit::usize(queue);
     let (banks, flat, bank_docs) = filters(m, plan);
     let services = crate::services::module_services(plan, mi);
+    let module_state = crate::supervision::module_glue(plan, mi);
     let banks_doc = format!(
         "bxCAN filter banks (32-bit scale, 29-bit identifiers), in bank order: the sync frame, heartbeats and exactly this module's subscriptions.\n{bank_docs}"
     );
@@ -353,6 +354,26 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
         .iter()
         .map(|&b| u8::try_from(b).unwrap_or(u8::MAX))
         .collect();
+    let safety = quote! {
+        ::rtcan::pubsub::SafetyConfig {
+            module: INDEX,
+            master: super::MASTER,
+            // Three missed master heartbeats of the default period.
+            max_missed_cycles: (3 * ::rtcan::core::engine::HEARTBEAT_CYCLES) as u16,
+        }
+    };
+    // A supervised robot (robot.toml `on_missing`) applies its rules on every module.
+    let status = if plan.supervision.rules.is_empty() {
+        quote!(::rtcan::pubsub::SystemStatus::with_backups(#safety, &[#(#backups),*]))
+    } else {
+        quote! {
+            ::rtcan::pubsub::SystemStatus::supervised(#safety, &[#(#backups),*], ::rtcan::pubsub::Supervised {
+                modules: super::supervision::MODULES as u8,
+                missing_after: super::supervision::MISSING_AFTER_CYCLES,
+                rules: super::supervision::RULES,
+            })
+        }
+    };
     let doc = format!(
         "Module `{}` (index {}, board {}{}).",
         m.name,
@@ -403,6 +424,7 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             pub fn engine(now: ::rtcan::core::Nanos) -> Engine<'static> {
                 let mut engine = ::rtcan::core::Engine::new(TABLES, now);
                 engine.set_backup(BACKUP_RANK, &super::MASTER_MASKS);
+                engine.set_heartbeat_cycles(super::supervision::HEARTBEAT_CYCLES);
                 engine
             }
             const _: () = ::core::assert!(::rtcan::tables_fit(&TABLES, RX_COUNT, ARENA_BYTES), #mismatch);
@@ -438,19 +460,14 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             #services
 
             #params
+            #module_state
 
             /// Transmit topics in `TX` order, for `ModuleHost`.
             pub static TX_PORTS: [&dyn ::rtcan::pubsub::TxPort; #ntx] = [#(&topics::#tx_ports),*];
             /// Receive topics in `RX` order, for `ModuleHost`.
             pub static RX_PORTS: [&dyn ::rtcan::pubsub::RxPort; #nrx] = [#(&topics::#rx_ports),*];
             /// System status as seen from this module (sync, master heartbeat, fingerprints).
-            pub static STATUS: ::rtcan::pubsub::SystemStatus =
-                ::rtcan::pubsub::SystemStatus::with_backups(::rtcan::pubsub::SafetyConfig {
-                    module: INDEX,
-                    master: super::MASTER,
-                    // Three missed master heartbeats.
-                    max_missed_cycles: (3 * ::rtcan::core::engine::HEARTBEAT_CYCLES) as u16,
-                }, &[#(#backups),*]);
+            pub static STATUS: ::rtcan::pubsub::SystemStatus = #status;
             /// The nodes whose worst state goes into this module's heartbeat.
             pub static NODES: [&::rtcan::pubsub::Node; #nnodes] = [#(&nodes::#node_refs::NODE),*];
             /// Every static of this module back to power-on: topics (blocks held by live

@@ -634,9 +634,14 @@ fn firmware_manifest(images: &[&rtcan_model::ModulePlan], rtcan: &str) -> String
          # build.rs) is the smallest of the STM32F103 boards, so every image fits every board.\n\
          rtcan-board-stm32f103 = {{ path = \"{rtcan}/boards/stm32f103\" }}\n\
          rtic = {{ version = \"2.1\", features = [\"thumbv7-backend\"] }}\n\
-         cortex-m = {{ version = \"0.7.10\", features = [\"critical-section-single-core\"] }}\n\
+         # No critical-section-single-core: rtcan-board-stm32f103 sets the implementation\n\
+         # (BASEPRI at the protocol task's priority, so critical sections never block the\n\
+         # slot timer or the CAN interrupts).\n\
+         cortex-m = \"0.7.10\"\n\
          cortex-m-rt = \"0.7\"\nheapless = \"0.9\"\ndefmt = \"1\"\npanic-probe = \"1\"\n\n\
          [workspace]\n\n\
+         # The HAL without cortex-m's PRIMASK critical section ({rtcan}/vendor/README.md).\n\
+         [patch.crates-io]\nstm32f1xx-hal = {{ path = \"{rtcan}/vendor/stm32f1xx-hal\" }}\n\n\
          # As examples/triskar2, so a shared CARGO_TARGET_DIR reuses its dependency builds.\n\
          [profile.dev]\nopt-level = \"s\"\ndebug = true\n\n\
          [profile.release]\nopt-level = \"z\"\nlto = true\ncodegen-units = 1\ndebug = true\nincremental = false\n"

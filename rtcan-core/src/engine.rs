@@ -312,6 +312,8 @@ pub struct Engine<'t, const RX: usize, const ARENA: usize, const Q: usize> {
     queue: EdfQueue<Item, Q>,
     in_flight: usize,
     heartbeat_pending: bool,
+    /// Heartbeat period in cycles (`HEARTBEAT_CYCLES` unless `set_heartbeat_cycles`).
+    heartbeat_cycles: u8,
     /// Backup master: rank (1 = first to take over) and the hyperperiod's masks.
     backup: Option<(u8, &'t [u64])>,
     /// Local time at which this backup takes over mastership (MAX: not pending).
@@ -385,6 +387,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
             queue: EdfQueue::new(),
             in_flight: 0,
             heartbeat_pending: false,
+            heartbeat_cycles: HEARTBEAT_CYCLES as u8,
             // The configured master keeps its masks to take mastership back after a yield.
             backup: if master {
                 Some((0, tables.master_masks))
@@ -415,6 +418,16 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
     pub fn try_new(tables: NodeTables<'t>, now: Nanos) -> Result<Self, TablesError> {
         check_tables(&tables, RX, ARENA)?;
         Ok(Self::new(tables, now))
+    }
+
+    /// Heartbeat every `cycles` cycles (1..=`HEARTBEAT_CYCLES`, others clamped) instead of
+    /// `HEARTBEAT_CYCLES`: a supervised robot (robot.toml `on_missing`) beats faster so
+    /// that a dead module is missed within a few cycles (docs/SERVICES.md §1). The
+    /// stagger by module index is kept. Call right after `new`.
+    pub fn set_heartbeat_cycles(&mut self, cycles: u8) {
+        let n = cycles.clamp(1, HEARTBEAT_CYCLES as u8);
+        self.heartbeat_cycles = n;
+        self.pos.heartbeat_in = self.tables.module % n;
     }
 
     /// Makes this slave backup master number `rank` (1 = first) with the masks of the
@@ -765,7 +778,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         let p = &mut self.pos;
         p.start_local += ahead * cycle_local;
         // Keep the heartbeat stagger; a heartbeat due in a skipped cycle goes out next.
-        let beats = HEARTBEAT_CYCLES as u8;
+        let beats = self.heartbeat_cycles;
         let due_in = p.heartbeat_in % beats;
         let back = (skipped % u64::from(beats)) as u8;
         p.heartbeat_in = (due_in + beats - back) % beats;
@@ -892,7 +905,7 @@ impl<'t, const RX: usize, const ARENA: usize, const Q: usize> Engine<'t, RX, ARE
         }
         host.event(Event::CycleStart);
         if self.pos.heartbeat_in == 0 {
-            self.pos.heartbeat_in = HEARTBEAT_CYCLES as u8;
+            self.pos.heartbeat_in = self.heartbeat_cycles;
             self.heartbeat_pending = true;
         }
         self.pos.heartbeat_in -= 1;

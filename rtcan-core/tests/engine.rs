@@ -1029,3 +1029,40 @@ fn window_frames_leave_a_mailbox_for_the_next_hrt_frame() {
         assert_eq!(e.counters().hrt_late, u32::from(!hrt_loaded), "{policy:?}");
     }
 }
+
+/// Heartbeats each module sent in the `cycles` cycles from cycle 10 on.
+fn heartbeats_per_module(bus: &Bus, cycles: u64) -> [usize; 3] {
+    let mut n = [0; 3];
+    for w in &bus.log {
+        let Some(hb) = rtcan_core::heartbeat::parse_heartbeat(&w.frame) else {
+            continue;
+        };
+        let (cycle, _) = slot_of(w.sof);
+        if (10..10 + cycles).contains(&cycle) {
+            n[usize::from(hb.module)] += 1;
+        }
+    }
+    n
+}
+
+/// A supervised robot (robot.toml `on_missing`) sets a shorter heartbeat period: every
+/// module then beats every cycle; by default once every `HEARTBEAT_CYCLES` = 10.
+#[test]
+fn heartbeat_period_is_settable_per_robot() {
+    let (mut bus, _) = paper_bus(3);
+    bus.run(T0 + 40 * 60 * SLOT_NS);
+    assert_eq!(heartbeats_per_module(&bus, 30), [3, 3, 3]);
+    let (mut fast, _) = paper_bus(3);
+    for n in &mut fast.nodes {
+        n.engine.set_heartbeat_cycles(1);
+    }
+    fast.run(T0 + 40 * 60 * SLOT_NS);
+    assert_eq!(heartbeats_per_module(&fast, 30), [30, 30, 30]);
+    // 0 is clamped to 1, above 10 to 10.
+    let (mut clamped, _) = paper_bus(3);
+    clamped.nodes[0].engine.set_heartbeat_cycles(0);
+    clamped.nodes[1].engine.set_heartbeat_cycles(200);
+    clamped.nodes[2].engine.set_heartbeat_cycles(2);
+    clamped.run(T0 + 40 * 60 * SLOT_NS);
+    assert_eq!(heartbeats_per_module(&clamped, 30), [30, 3, 15]);
+}

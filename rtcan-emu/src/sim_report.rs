@@ -333,6 +333,8 @@ pub fn triskar_run(
         gateway_rx: (rx.proximity, rx.battery, rx.log, rx.last_log.clone()),
         modules,
         supervision: Vec::new(),
+        // The images apply the rules but publish neither health nor tables.
+        module_state: Default::default(),
         // No firmware update in an emulated run (the images have no update port yet).
         update: Vec::new(),
         booted: Vec::new(),
@@ -350,6 +352,7 @@ pub fn triskar_run(
             faults: Vec::new(),
             guardian: false,
             update: None,
+            supervise: false,
         },
     })
 }

@@ -39,13 +39,17 @@ fn module_name(model: &Model, m: usize) -> &str {
 
 /// Message ID of every topic (indexed like `model.topics`), or `None` if they do not fit
 /// in the 16-bit ID space. Service topics (`[services]`) are numbered after every
-/// declared topic, local ones included, so adding a service moves no existing ID.
+/// declared topic, local ones included, so adding a service moves no existing ID; the
+/// module-state topics of a supervised robot after the services' ones, for the same reason.
 pub fn assign(model: &Model) -> Option<Vec<u16>> {
     let mut ids = vec![0u16; model.topics.len()];
+    let (state, rest): (Vec<usize>, Vec<usize>) =
+        (0..model.topics.len()).partition(|i| model.is_module_state_topic(*i));
     let (declared, services): (Vec<usize>, Vec<usize>) =
-        (0..model.topics.len()).partition(|i| !model.is_service_topic(*i));
+        rest.into_iter().partition(|i| !model.is_service_topic(*i));
     let cursor = place(model, &declared, u32::from(FIRST_TOPIC_MSG_ID), &mut ids)?;
-    place(model, &services, cursor, &mut ids)?;
+    let cursor = place(model, &services, cursor, &mut ids)?;
+    place(model, &state, cursor, &mut ids)?;
     Some(ids)
 }
 

@@ -24,12 +24,14 @@ pub mod fingerprint;
 pub mod ids;
 pub mod lock;
 pub mod model;
+pub mod module_state;
 pub mod names;
 pub mod params;
 pub mod plan;
 pub mod report;
 pub mod schedule;
 pub mod services;
+pub mod supervision;
 pub mod syntax;
 pub mod timing;
 pub mod units;
@@ -149,9 +151,16 @@ pub fn analyze_locked(file: &str, source: &str, lock: Option<(&str, &str)>) -> A
             }
             if let (Some(m), syntax::Kind::Table(entries)) = (&mut model, &root.kind) {
                 services::validate(entries, m, &mut items);
+                // After the services: their topics keep their IDs.
+                m.module_state = module_state::append(entries, m, &mut items);
             }
             if let Some(m) = &model {
                 plan = plan::build_locked(m, file, lock.as_ref(), &mut items);
+                if let (Some(p), syntax::Kind::Table(entries)) = (&mut plan, &root.kind) {
+                    // Before `timing`: the heartbeat period is part of each module's load.
+                    let (bitrate, cycle) = (p.bus.bitrate, p.bus.cycle_ns);
+                    p.supervision = supervision::validate(entries, m, bitrate, cycle, &mut items);
+                }
                 if let Some(p) = &mut plan {
                     timing::check(m, p, &mut items);
                     if let syntax::Kind::Table(entries) = &root.kind {

@@ -338,6 +338,9 @@ pub struct Model {
     pub services: Vec<crate::services::Service>,
     /// `[params]` (rtcan_model::params), in declaration order.
     pub params: Vec<crate::params::ParamDecl>,
+    /// A supervised robot's module-state topics (rtcan_model::module_state), appended
+    /// after the services' ones.
+    pub module_state: Option<crate::module_state::StateTopics>,
 }
 
 impl Model {
@@ -346,6 +349,12 @@ impl Model {
         self.services
             .iter()
             .any(|s| s.request_topic == topic || s.reply_topic == topic)
+    }
+    /// True for a module-state topic (health or table) of a supervised robot.
+    pub fn is_module_state_topic(&self, topic: usize) -> bool {
+        self.module_state
+            .as_ref()
+            .is_some_and(|s| s.contains(topic))
     }
     /// Payload size of a topic.
     pub fn topic_size(&self, topic: &Topic) -> usize {
@@ -356,12 +365,23 @@ impl Model {
         self.nodes.get(node).map_or(0, |n| n.module)
     }
     /// True when some subscriber is on another module than the publisher: only those
-    /// topics go on the bus (local subscribers share memory, as in R2P).
+    /// topics go on the bus (local subscribers share memory, as in R2P), and the module
+    /// tables, which only the host reads.
     pub fn on_bus(&self, topic: &Topic) -> bool {
         let pm = self.node_module(topic.publisher);
         topic
             .subscribers
             .iter()
             .any(|s| self.node_module(s.node) != pm)
+            || self.is_module_table(topic)
+    }
+    /// True for a module table topic (`module_state_<m>`): on the bus with no module
+    /// subscribing, for the host (rtcan_model::module_state).
+    pub fn is_module_table(&self, topic: &Topic) -> bool {
+        self.module_state.as_ref().is_some_and(|s| {
+            s.tables
+                .iter()
+                .any(|&(_, t)| self.topics.get(t).is_some_and(|x| x.name == topic.name))
+        })
     }
 }

@@ -83,8 +83,30 @@ pub const NOT_RAW: &[&str] = &["self", "Self", "super", "crate", "_"];
 /// message structs are written with: a module `u8` would shadow the type `u8` for every
 /// field in the generated code.
 pub const RESERVED_MODULE_NAMES: &[&str] = &[
-    "topics", "link", "nodes", "rtcan", "bool", "char", "str", "u8", "u16", "u32", "u64", "u128",
-    "usize", "i8", "i16", "i32", "i64", "i128", "isize", "f16", "f32", "f64", "f128",
+    "topics",
+    "link",
+    "nodes",
+    "supervision",
+    "rtcan",
+    "bool",
+    "char",
+    "str",
+    "u8",
+    "u16",
+    "u32",
+    "u64",
+    "u128",
+    "usize",
+    "i8",
+    "i16",
+    "i32",
+    "i64",
+    "i128",
+    "isize",
+    "f16",
+    "f32",
+    "f64",
+    "f128",
 ];
 
 /// True for a Rust keyword of any kind.

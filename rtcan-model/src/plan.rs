@@ -210,6 +210,10 @@ pub struct Plan {
     pub services: Vec<crate::services::Service>,
     /// `[params]`, from the model.
     pub params: Vec<crate::params::ParamDecl>,
+    /// A supervised robot's module-state topics (`module_state`); they are in `topics`.
+    pub module_state: Option<crate::module_state::StateTopics>,
+    /// `on_missing` rules and the heartbeat period (filled by `analyze`).
+    pub supervision: crate::supervision::Supervision,
 }
 
 /// Per-module tables, ready to be emitted as `rtcan_core::tables` constants.
@@ -744,6 +748,8 @@ pub fn build_locked(
         chains: Vec::new(),
         services: model.services.clone(),
         params: model.params.clone(),
+        module_state: model.module_state.clone(),
+        supervision: Default::default(),
     };
     plan.fingerprint = crate::fingerprint::of(&plan);
     Some(plan)

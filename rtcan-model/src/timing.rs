@@ -19,7 +19,7 @@ use crate::model::{Board, FilterMode, Model};
 use crate::plan::Plan;
 use crate::units;
 use rtcan_core::fragment::wire_len;
-use rtcan_core::heartbeat::{HEARTBEAT_DLC, HEARTBEAT_PERIOD_CYCLES};
+use rtcan_core::heartbeat::HEARTBEAT_DLC;
 use rtcan_core::timing::{bits_to_ns, STUFFED_OVERHEAD_BITS, TAIL_BITS};
 use rtcan_core::Class;
 use std::fmt::Write as _;
@@ -201,7 +201,7 @@ fn module_timing(plan: &Plan, mi: usize, t: &CostTable, cpu: BoardCpu) -> Module
     // Frames it sends: heartbeat, the sync on the master, its topics.
     let mut tx_min = min_frame_ns(usize::from(HEARTBEAT_DLC), bitrate);
     let cycle_s = bus.cycle_ns as f64 / 1e9;
-    let mut tx_per_cycle = 1.0 / f64::from(HEARTBEAT_PERIOD_CYCLES);
+    let mut tx_per_cycle = 1.0 / f64::from(plan.supervision.heartbeat_cycles.max(1));
     if m.is_master {
         tx_per_cycle += 1.0;
     }

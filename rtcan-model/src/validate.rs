@@ -29,7 +29,8 @@ const BUS_KEYS: &[&str] = &[
     "master",
     "backup_masters",
 ];
-const MODULE_KEYS: &[&str] = &["board", "filters"];
+// `on_missing` and `dependents` are read by `supervision`.
+const MODULE_KEYS: &[&str] = &["board", "filters", "on_missing", "dependents"];
 const NODE_KEYS: &[&str] = &["module", "priority"];
 const TOPIC_KEYS: &[&str] = &[
     "type",
@@ -429,6 +430,7 @@ pub fn validate(root: &syntax::Node, diags: &mut Vec<Diagnostic>) -> Option<Mode
         bridge: crate::bridge_keys::BridgeDecl::default(),
         services: Vec::new(),
         params: Vec::new(),
+        module_state: None,
     })
 }
 
@@ -497,6 +499,7 @@ fn generated_name_clashes(v: &mut V<'_>, modules: &[Entry], topics: &[Entry]) {
                 "topics" => "the generated module holding the topic constants",
                 "link" => "the generated module holding the serial link's topic numbers",
                 "nodes" => "the generated module placing every node on its module",
+                "supervision" => "the generated module holding the supervision rules",
                 "rtcan" => "the `rtcan` crate (`rtcan::robot!` next to it would be ambiguous)",
                 _ => "a primitive type the generated message structs use",
             };

@@ -132,8 +132,11 @@ fn removed_module_is_not_listed() {
 }
 
 /// With a robot.lock (issue 14), adding the IMU module with its HRT topic to the gateway
-/// changes only the new module and the gateway (receiver and master); every other image
-/// is compatible and the heartbeat fingerprint is unchanged, so they keep running.
+/// changes only the new module and the sync-capable ones: the gateway (receiver and
+/// master) and the backup motor1, which receive every module's health and each other's
+/// module table, whose size follows the module count (robot.toml `on_missing`, docs/
+/// SERVICES.md §1); every other image is compatible and the heartbeat fingerprint is
+/// unchanged, so they keep running.
 #[test]
 fn with_a_lock_only_the_new_module_and_the_master_change() {
     let src = triskar2_src();
@@ -148,7 +151,14 @@ fn with_a_lock_only_the_new_module_and_the_master_change() {
     let new = locked(&with_imu(&src));
     assert_eq!(old.fingerprint, new.fingerprint);
     let ch = images_to_change(&old, &new);
-    assert_eq!(names(&ch), ["gateway", "imu"], "{ch:#?}");
+    assert_eq!(names(&ch), ["gateway", "motor1", "imu"], "{ch:#?}");
+    let m1 = &ch[1];
+    assert!(
+        m1.reasons
+            .iter()
+            .any(|r| r == "topic \"health_imu\": added"),
+        "{m1:#?}"
+    );
     let gw = &ch[0];
     assert!(
         gw.reasons.iter().any(|r| r == "topic \"imu_rate\": added"),
@@ -160,8 +170,21 @@ fn with_a_lock_only_the_new_module_and_the_master_change() {
             .any(|r| r == "master reservation masks changed"),
         "{gw:#?}"
     );
-    assert!(
-        new.moves.iter().all(|m| m.subject == "gateway"),
+    // Besides the gateway: motor1's filters (it now receives `health_imu`), and the two
+    // module tables, one row longer, move to new IDs (their layout changed).
+    let moved: Vec<(&str, &str)> = new
+        .moves
+        .iter()
+        .map(|m| (m.subject.as_str(), m.what))
+        .collect();
+    assert_eq!(
+        moved,
+        [
+            ("module_state_gateway", "msg_id"),
+            ("module_state_motor1", "msg_id"),
+            ("gateway", "filters"),
+            ("motor1", "filters"),
+        ],
         "{:?}",
         new.moves
     );

@@ -167,13 +167,25 @@ fn triskar2_module_tables() {
     assert_eq!(t.bus.hyperperiod_cycles, 4);
     assert_eq!(
         t.tx.iter().map(|x| x.msg_id.0).collect::<Vec<_>>(),
-        vec![0x144, 0x147]
+        // encoder1, wheel_setpoints; then module_state_motor1 and health_motor1 (the
+        // module-state topics, numbered after every declared and service topic).
+        vec![0x144, 0x147, 0x151, 0x152]
     );
     assert_eq!(
         t.rx.iter()
             .map(|x| (x.msg_id.0, x.size, x.arena_offset))
             .collect::<Vec<_>>(),
-        vec![(0x146, 12, 0)]
+        // velocity; the health of motor2, motor3, proximity and psu (a block shared
+        // with the gateway); the gateway's health. Not the gateway's module table: only
+        // the host reads it.
+        vec![
+            (0x146, 12, 0),
+            (0x14C, 8, 12),
+            (0x14D, 8, 20),
+            (0x14E, 8, 28),
+            (0x14F, 8, 36),
+            (0x153, 8, 44)
+        ]
     );
     assert!(t.master_masks.is_empty());
     let first: Vec<CalEntry> = t.calendar.iter().take(5).copied().collect();

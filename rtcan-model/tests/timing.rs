@@ -100,13 +100,17 @@ fn prioritised_latency_is_entry_plus_the_txrq_path_exactly() {
     // Its load: per 99 us frame the RX interrupt and task, per slot the timer and the
     // preparation, per cycle the sync, its frames, SysTick; every activation + 12 cycles.
     let c = |p: &str| new.cycles(new.path(p).max);
-    // Frames per 10 ms cycle: heartbeat every 10 cycles, encoder1 (200 Hz, 1 frame),
-    // wheel_setpoints (100 Hz, 2 frames).
-    let tx_per_cycle = 0.1 + 2.0 * 1.0 + 1.0 * 2.0;
+    // Frames per 10 ms cycle: heartbeat every cycle (Triskar2 is supervised:
+    // `on_missing`), encoder1 (200 Hz, 1 frame), wheel_setpoints (100 Hz, 2 frames), its
+    // and at their declared 10 Hz its health (1 frame) and its module table as a backup
+    // master (12 frames).
+    let tx_per_cycle = 1.0 + 2.0 * 1.0 + 1.0 * 2.0;
+    let tx_10hz = 1.0 + 12.0;
     let per_s = (12.0 + c("isr_can_rx") + c("task_rx_process")) / 99e-6
         + (12.0 + c("isr_slot_timer") + c("task_prepare_slot")) / 166_666e-9
         + c("task_sync_slave") / 9_999_960e-9
         + (12.0 + c("isr_can_tx") + c("task_tx_done")) * tx_per_cycle / 9_999_960e-9
+        + (12.0 + c("isr_can_tx") + c("task_tx_done")) * tx_10hz * 10.0
         + (12.0 + c("systick")) / 1e-3;
     assert!(
         (m1.cpu_load - per_s / 72e6).abs() < 1e-9,
@@ -167,17 +171,17 @@ fn single_priority_error_text_is_exact() {
     assert_eq!(
         rendered,
         r#"error[guard-too-short]: module `gateway`: worst-case latency from a slot boundary to its TXRQ (139.372 us) plus its clock error bound (0 ns) is 139.372 us, more than the guard (5 us)
-  --> robot.toml:58:10
+  --> robot.toml:61:10
    |
-58 | [modules.gateway]       # host link (uROSnode); master of the bus
+61 | [modules.gateway]       # host link (uROSnode); master of the bus
    |          ^^^^^^^
    = help: set `guard = "139.372us"` in `[bus]` and use at most 33 slots per 10 ms cycle (slot >= 160 us frame + guard)
    = note: cost table `single-priority`, CPI 1.25 at 72 MHz; docs/ROBOT_TOML.md "Timing check"
 
 error[cpu-overload]: module `gateway`: protocol CPU load 109% at 100% bus load of the shortest frames its filters accept (107 us each)
-  --> robot.toml:58:10
+  --> robot.toml:61:10
    |
-58 | [modules.gateway]       # host link (uROSnode); master of the bus
+61 | [modules.gateway]       # host link (uROSnode); master of the bus
    |          ^^^^^^^
    = help: lower the bitrate, use fewer slots per cycle, or exact filters (`filters = "exact"`) so that fewer frames reach the CPU
    = note: cost table `single-priority`, CPI 1.25 at 72 MHz; docs/ROBOT_TOML.md "Timing check"

@@ -37,7 +37,9 @@ pub use node::{module_state, Node, NodeState};
 pub use port::{ModuleHost, RxPort, TxPort};
 pub use publisher::{AllocWait, PoolExhausted, PublishWait, Publisher, SendError, WouldBlock};
 pub use slot_grid::{HrtSlots, SlotEvery, SlotGrid};
-pub use status::{SafeReason, SafetyConfig, SystemStatus};
+pub use status::{SafeReason, SafetyConfig, Supervised, SystemStatus};
 pub use subscriber::{Recv, Subscriber};
-pub use supervision::{EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing};
+pub use supervision::{
+    EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing, Publish, Supervisor,
+};
 pub use topic::{pool_blocks, RecvError, Remote, Topic, TopicStats};

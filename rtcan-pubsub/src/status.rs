@@ -32,6 +32,20 @@ pub enum SafeReason {
     MasterSilent,
     /// The master announced `Fail` or `Stop`.
     MasterStopped,
+    /// `module` is missing and its robot.toml rule (`on_missing`) puts this module in
+    /// its safe state (`ModuleTable::safe_required`).
+    ModuleMissing { module: u8 },
+}
+
+/// robot.toml's supervision as one module applies it (the generated `supervision`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Supervised {
+    /// Modules on the bus (indices `0..modules`).
+    pub modules: u8,
+    /// A module whose heartbeat is older than this many cycles is missing.
+    pub missing_after: u16,
+    /// The `on_missing` rules.
+    pub rules: &'static [crate::supervision::ModuleRule],
 }
 
 struct StatusState {
@@ -47,6 +61,8 @@ struct StatusState {
     sync_losses: u32,
     /// The slot grid on the local clock while synchronised (synchronous HRT publishers).
     grid: Option<SlotGrid>,
+    /// Cycles started since power-on (wrapping): the module-state publications' clock.
+    cycles: u32,
 }
 
 const POWER_ON: StatusState = StatusState {
@@ -60,14 +76,42 @@ const POWER_ON: StatusState = StatusState {
     ages: [0; 64],
     sync_losses: 0,
     grid: None,
+    cycles: 0,
 };
 
 /// One cycle passed: every heartbeat (the master's included) is a cycle older.
 fn age(st: &mut StatusState) {
+    st.cycles = st.cycles.wrapping_add(1);
     st.master_age = st.master_age.saturating_add(1);
     for a in st.ages.iter_mut() {
         *a = a.saturating_add(1);
     }
+}
+
+/// See `SystemStatus::module_missing`. When every other module is silent at once, the
+/// cause is the bus or the sync (slaves that lost the sync stop their cycle and their
+/// heartbeats: a master change under bit errors does this for a few cycles), not the
+/// modules: the sync rules (`NoSync`, `MasterSilent`) cover it, and no module is
+/// declared missing. With no third module heard to compare with, the age alone decides.
+fn is_missing(st: &StatusState, me: u8, module: u8, missing_after: u16) -> bool {
+    if module == me || module >= 64 {
+        return false;
+    }
+    let heard = |m: u8| st.heard & (1u64 << m) != 0;
+    let age = |m: u8| st.ages.get(usize::from(m)).copied().unwrap_or(u16::MAX);
+    if !heard(module) {
+        return true;
+    }
+    if age(module) <= missing_after {
+        return false;
+    }
+    let mut others = (0..64u8).filter(|&m| m != me && m != module && heard(m));
+    let mut any = false;
+    let fresh = others.any(|m| {
+        any = true;
+        age(m) <= missing_after
+    });
+    fresh || !any
 }
 
 /// The system-status view of one module. `static STATUS: SystemStatus = SystemStatus::new(cfg);`
@@ -76,6 +120,7 @@ pub struct SystemStatus {
     /// Backup masters in rank order: after the configured master, the sync master is
     /// the first of these still heard (the arbiter's takeover order, rtcan-core arbiter).
     backups: &'static [u8],
+    supervised: Option<Supervised>,
     state: Mutex<RefCell<StatusState>>,
 }
 
@@ -93,8 +138,46 @@ impl SystemStatus {
         SystemStatus {
             config,
             backups,
+            supervised: None,
             state: Mutex::new(RefCell::new(POWER_ON)),
         }
+    }
+
+    /// As `with_backups`, applying robot.toml's `on_missing` rules: the safe state is
+    /// also required while a module is missing whose rule says all, or says its
+    /// dependents and this module is one (`SafeReason::ModuleMissing`). Every module
+    /// times every heartbeat itself, so the rule holds whoever the sync master is.
+    pub const fn supervised(
+        config: SafetyConfig,
+        backups: &'static [u8],
+        supervised: Supervised,
+    ) -> Self {
+        SystemStatus {
+            config,
+            backups,
+            supervised: Some(supervised),
+            state: Mutex::new(RefCell::new(POWER_ON)),
+        }
+    }
+
+    /// The rules this status applies, if any.
+    pub fn supervision(&self) -> Option<Supervised> {
+        self.supervised
+    }
+
+    /// Modules missing now under the supervision (bit m = module m): empty without it.
+    fn missing(&self, st: &StatusState) -> u64 {
+        let Some(sv) = self.supervised else { return 0 };
+        (0..sv.modules.min(64))
+            .filter(|&m| is_missing(st, self.config.module, m, sv.missing_after))
+            .fold(0, |mask, m| mask | (1u64 << m))
+    }
+
+    /// Whether `module` is missing as seen from here: never heard since power-on, or its
+    /// heartbeat more than `missing_after` cycles old *while another module's is not*
+    /// (`is_missing`). Never this module itself.
+    pub fn module_missing(&self, module: u8, missing_after: u16) -> bool {
+        self.with(|st| is_missing(st, self.config.module, module, missing_after))
     }
 
     /// The module whose heartbeat the safe-state rule watches now: the configured master
@@ -200,6 +283,9 @@ impl SystemStatus {
                     fingerprint,
                 });
             }
+            // The sync master does not apply the rules to itself: its nodes' stop would
+            // reach every slave as `MasterStopped`, which outlives the missing module
+            // (the gateway's app latches it; found by the fault campaign).
             if cfg.module == cfg.master {
                 return None;
             }
@@ -207,6 +293,17 @@ impl SystemStatus {
             if cfg.module == master {
                 return None;
             }
+            let missing = self.missing(st);
+            let rule = self.supervised.and_then(|sv| {
+                sv.rules
+                    .iter()
+                    .find(|r| {
+                        r.module < 64
+                            && missing & (1u64 << r.module) != 0
+                            && crate::supervision::applies(r, cfg.module)
+                    })
+                    .map(|r| SafeReason::ModuleMissing { module: r.module })
+            });
             if !st.synced {
                 return Some(SafeReason::NoSync);
             }
@@ -225,7 +322,7 @@ impl SystemStatus {
             }
             match NodeState::from_u8(state) {
                 Some(NodeState::Fail) | Some(NodeState::Stop) => Some(SafeReason::MasterStopped),
-                _ => None,
+                _ => rule,
             }
         })
     }
@@ -244,6 +341,11 @@ impl SystemStatus {
                 None
             }
         })
+    }
+
+    /// Cycles started since power-on (`Event::CycleStart`, wrapping).
+    pub fn cycles(&self) -> u32 {
+        self.with(|st| st.cycles)
     }
 
     /// Times sync was lost.

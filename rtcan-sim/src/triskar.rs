@@ -27,6 +27,7 @@ use crate::slots::overlaps;
 use rtcan::pubsub::supervision::{table_bytes, ModuleTable};
 
 pub mod module;
+pub mod module_state;
 pub mod physics;
 pub mod report;
 pub mod services;
@@ -50,7 +51,7 @@ pub struct TriskarConfig {
     /// The gateway (master) stops executing at this time, s (failure injection).
     pub gateway_dies_at_s: Option<f64>,
     /// Any module (bus index, seconds) stops executing then (failure injection). The run
-    /// then steps one cycle at a time and records the supervision table (`supervision`).
+    /// then steps 1/20 cycle at a time and records the supervision table (`supervision`).
     pub module_dies_at: Option<(usize, f64)>,
     /// Scripted faults (`fault::parse`, `--fault`), on top of the two above.
     pub faults: Vec<crate::fault::Fault>,
@@ -58,6 +59,9 @@ pub struct TriskarConfig {
     pub guardian: bool,
     /// A firmware update over the bus during the run (`update.rs`, `rtcan flash`).
     pub update: Option<crate::update::UpdateJob>,
+    /// Step 1/20 cycle at a time and record the supervision table (`supervision`) even
+    /// without `module_dies_at` (a clean run checked for false "missing").
+    pub supervise: bool,
 }
 
 impl Default for TriskarConfig {
@@ -76,6 +80,7 @@ impl Default for TriskarConfig {
             faults: Vec::new(),
             guardian: false,
             update: None,
+            supervise: false,
         }
     }
 }
@@ -140,9 +145,12 @@ pub struct TriskarRun {
     /// Messages the gateway received: proximity, battery, log; the last log line.
     pub gateway_rx: (u32, u32, u32, String),
     pub modules: Vec<ModuleReport>,
-    /// With `module_dies_at`: the module table of the current sync master after every
-    /// cycle, as decoded from its topic wire form.
+    /// With `module_dies_at` or `supervise`: the module table of the current sync master
+    /// every 1/20 cycle, through its wire form (`ModuleTable::encode`/`decode`).
     pub supervision: Vec<SupervisionSample>,
+    /// With `module_dies_at` or `supervise`: the module-state topics' publications and
+    /// every table a module received over the bus (`module_state.rs`).
+    pub module_state: module_state::StateLog,
     /// With `update`: every target's result, in order, and what each module would boot
     /// at the end (slot, image length, CRC-32), by bus index.
     pub update: Vec<crate::update::UpdateResult>,
@@ -300,12 +308,13 @@ fn supervise(bus: &Bus<Box<dyn TriskarModule>>, t: Nanos) -> Option<SupervisionS
         .find(|&n| bus.module(n).is_some_and(|m| m.alive_at(t)))?;
     let reporter = u8::try_from(reporter).ok()?;
     let m = bus.module(usize::from(reporter))?;
-    let table = ModuleTable::<{ MODULES.len() }>::snapshot(
+    let table = ModuleTable::<{ MODULES.len() }>::snapshot_after(
         m.status(),
         reporter,
         robot::FINGERPRINT,
         None,
-        m.health(),
+        &m.known_health()?,
+        robot::supervision::MISSING_AFTER_CYCLES,
     );
     let mut wire = [0u8; table_bytes(MODULES.len())];
     let n = table.encode(&mut wire)?;
@@ -376,6 +385,10 @@ pub(crate) fn new_shared(cfg: &TriskarConfig) -> Rc<RefCell<Shared>> {
             .map(|j| crate::update::UpdateBus::new(j, MODULES.len(), robot::FINGERPRINT)),
         params: None,
         services: services::ServiceLog::default(),
+        module_state: module_state::StateLog {
+            record: cfg.supervise || cfg.module_dies_at.is_some(),
+            ..Default::default()
+        },
     }))
 }
 
@@ -450,6 +463,7 @@ pub(crate) fn build_bus(
                     4 => Some(Box::new(services::Server::default())),
                     _ => None,
                 };
+                m.state_io = Some(module_state::StateIo::for_module(n));
                 Box::new(m)
             }};
         }
@@ -585,9 +599,12 @@ fn simulate(
     let mut ov = 0;
     let mut t = 0;
     let mut supervision = Vec::new();
-    let step = match cfg.module_dies_at {
-        Some(_) => robot::BUS.cycle_ns().max(1),
-        None => CHUNK_NS,
+    let supervise_every_cycle = cfg.supervise || cfg.module_dies_at.is_some();
+    // Every 1/20 cycle: a module missing for part of a cycle shows in the samples.
+    let step = if supervise_every_cycle {
+        (robot::BUS.cycle_ns() / 20).max(1)
+    } else {
+        CHUNK_NS
     };
     // In chunks: frames, fates and figures are measured as they come and dropped, so
     // memory does not grow with the run (docs/SIM.md, Memory).
@@ -600,7 +617,7 @@ fn simulate(
             next_action += 1;
         }
         bus.run_until(t);
-        if cfg.module_dies_at.is_some() {
+        if supervise_every_cycle {
             supervision.extend(supervise(&bus, t));
         }
         for w in &bus.wire {
@@ -718,6 +735,7 @@ fn simulate(
         ),
         modules,
         supervision,
+        module_state: std::mem::take(&mut sh.module_state),
         update: sh.update.as_ref().map(|u| u.results()).unwrap_or_default(),
         booted: (0..MODULES.len())
             .map(|m| sh.update.as_ref().and_then(|u| u.booted(m)))

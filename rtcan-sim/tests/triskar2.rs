@@ -204,63 +204,6 @@ fn srt_figures_under_bit_errors_follow_the_messages_not_their_rank() {
     }
 }
 
-/// Supervision (issue 15): the sync master times every module's heartbeat; its module
-/// table (through the topic's wire form) shows a killed module at most
-/// `MISSING_SLACK_CYCLES + 1` = 3 cycles after the heartbeat the module failed to send
-/// was due, and never before it died.
-#[test]
-fn module_table_shows_a_killed_module_within_3_cycles_of_its_missed_heartbeat() {
-    use rtcan::pubsub::supervision::{MISSING_AFTER_CYCLES, MISSING_SLACK_CYCLES};
-    let die_s = 2.0;
-    for (victim, seed) in [(5usize, 4u64), (2, 5)] {
-        let cfg = TriskarConfig {
-            sim: SimConfig {
-                seconds: 2.6,
-                seed,
-                ..SimConfig::default()
-            },
-            module_dies_at: Some((victim, die_s)),
-            ..TriskarConfig::default()
-        };
-        let r = triskar::run(&plan(), &cfg).unwrap();
-        let cycle = 10_000_000u64;
-        let die = (die_s * 1e9) as u64;
-        assert!(!r.supervision.is_empty());
-        // After warm-up (1 s) and before the death, every module is alive on the table.
-        for s in r
-            .supervision
-            .iter()
-            .filter(|s| s.t_ns > 1_000_000_000 && s.t_ns <= die)
-        {
-            assert_eq!(s.table.missing(), 0, "at {} ns: {:?}", s.t_ns, s.table);
-            assert_eq!(s.table.reporter, 0, "the gateway is the sync master");
-        }
-        let first = r
-            .supervision
-            .iter()
-            .find(|s| s.t_ns > 1_000_000_000 && s.table.missing() & (1 << victim) != 0)
-            .unwrap_or_else(|| panic!("module {victim} never shown missing"));
-        assert_eq!(first.table.missing(), 1 << victim, "only the victim");
-        // Its last heartbeat was at most one period before the death; the next one was
-        // due at most a period after it: shown missing within 3 cycles of that.
-        let row = first.table.rows[victim];
-        assert!(!row.alive && row.heard);
-        assert_eq!(row.age, MISSING_AFTER_CYCLES + 1);
-        let period = u64::from(rtcan::core::heartbeat::HEARTBEAT_PERIOD_CYCLES);
-        let latest = die + (period + u64::from(MISSING_SLACK_CYCLES) + 1) * cycle + cycle;
-        eprintln!(
-            "module {victim}: died at {die}, shown missing at {} ({:.1} cycles)",
-            first.t_ns,
-            (first.t_ns - die) as f64 / cycle as f64
-        );
-        assert!(first.t_ns > die && first.t_ns <= latest, "{}", first.t_ns);
-        // And it stays missing to the end.
-        for s in r.supervision.iter().filter(|s| s.t_ns >= first.t_ns) {
-            assert_ne!(s.table.missing() & (1 << victim), 0);
-        }
-    }
-}
-
 /// Synchronous HRT publishers (R2P §3.4.5, issue 14): every HRT sample a module sends
 /// is published `lead` (robot.toml, default 500 µs) before its slot on the slot clock,
 /// so at its frame's SOF it is at most `lead` + 20 µs old (the slot's SOF delay: guard,
@@ -303,7 +246,10 @@ fn hrt_samples_are_at_most_lead_plus_20_us_old_on_the_bus() {
             );
             seen.push(a.topic.clone());
         }
-        assert_eq!(m.counters.hrt_empty, 0, "{}", m.name);
+        // No HRT slot empty, but odometry's first (21 ms): Triskar2 is supervised and
+        // motor2 stays in its safe state until every module's first heartbeat was heard.
+        let empty = u32::from(m.name == "motor2");
+        assert_eq!(m.counters.hrt_empty, empty, "{}", m.name);
     }
     seen.sort();
     // The HRT topics on the bus (encoder2 stays on motor2).

@@ -6,13 +6,21 @@
 //! |---|---|---|
 //! | `slot_timer` (TIM2) | 4, highest | commit the prepared plan: TXRQ of the slot's frame, aborts |
 //! | `can_rx`, `can_tx`, `can_sce` | 3 | registers into lock-free queues; bus-off: abort all |
-//! | `protocol` (EXTI1) | 2 | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up |
+//! | `protocol` (EXTI1) | 2 = `PROTOCOL_PRIORITY`, the critical-section ceiling | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up |
 //! | `module_app` | 1 | the module's nodes, woken at their due times by the protocol task (slot clock) |
 //! | SysTick (monotonic) | lowest | backs up the app task's wake-up |
 //!
 //! Only the slot-timer resource (`glue::Core`: TIM2, plan, TX mailboxes) is shared across
 //! priorities; its critical sections are a few dozen instructions (QEMU row
 //! `critical_section_slot`), the blocking of the slot timer.
+//!
+//! Critical sections (`critical_section::with`: the R2P topics and status, `run::DUE`,
+//! rtic-time's queue) raise BASEPRI to the protocol task's level, `PROTOCOL_PRIORITY`
+//! (boards/stm32f103 `ceiling`); the slot timer and CAN ISRs are never blocked by them and
+//! never enter one (checked on each acquisition). Hence the CAN SCE interrupt leaves its
+//! log lines to the protocol task (`note_error_change`).
+use core::sync::atomic::{AtomicU8, Ordering};
+
 use heapless::spsc::Consumer;
 use rtcan_board_stm32f103::common::protocol::{
     Alarm, AlarmSetting, DynController, Lock, SlotTimerHw,
@@ -22,6 +30,7 @@ use rtcan_board_stm32f103::glue::Core;
 use rtcan_board_stm32f103::hal::gpio::Floating;
 use rtcan_board_stm32f103::hal::pac::{Interrupt, NVIC};
 use rtcan_board_stm32f103::slot_timer::SlotTimer;
+use rtcan_board_stm32f103::ErrorChange;
 use rtcan_core::engine::Engine;
 use rtcan_core::id::CanId;
 use rtcan_core::time::Nanos;
@@ -32,6 +41,41 @@ use crate::run::{take_due, DELIVERED};
 
 /// Interrupt of the protocol task (unused by the F103's peripherals in these images).
 pub const PROTOCOL_INTERRUPT: Interrupt = Interrupt::EXTI1;
+/// RTIC priority of the protocol task, the critical-section ceiling (one source: the
+/// board crate's `ceiling`; `module_app!` asserts its literals against it).
+pub use rtcan_board_stm32f103::ceiling::PROTOCOL_PRIORITY;
+
+/// Error-state changes the CAN SCE interrupt saw since the protocol task last logged
+/// them (bits `BUS_OFF`, `RECOVERED`): an atomic, so the interrupt logs nothing itself.
+static ERROR_CHANGES: AtomicU8 = AtomicU8::new(0);
+const BUS_OFF: u8 = 1;
+const RECOVERED: u8 = 2;
+
+/// Called by the CAN SCE interrupt: the protocol task logs `change` on its next run.
+pub fn note_error_change(change: ErrorChange) {
+    let bit = match change {
+        ErrorChange::BusOff => BUS_OFF,
+        ErrorChange::Recovered => RECOVERED,
+        ErrorChange::None => return,
+    };
+    ERROR_CHANGES.fetch_or(bit, Ordering::Relaxed);
+}
+
+/// Logs the error-state changes noted since the last call (protocol task). One log line
+/// for both (each defmt call site costs flash; proximity has a few dozen bytes left).
+#[inline(never)]
+fn log_error_changes() {
+    // A plain load first: the common case (nothing noted) costs no exclusive access.
+    if ERROR_CHANGES.load(Ordering::Relaxed) == 0 {
+        return;
+    }
+    let changes = ERROR_CHANGES.swap(0, Ordering::Relaxed);
+    defmt::warn!(
+        "CAN error state: bus-off {=bool}, recovered {=bool}",
+        changes & BUS_OFF != 0,
+        changes & RECOVERED != 0
+    );
+}
 /// Capacity of the RX event queue (the FIFO holds 3 frames; the protocol task may be
 /// held off by one prepare, < 3 frames at 1 Mbit/s).
 pub const RX_QUEUE: usize = 8;
@@ -104,6 +148,7 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
         tx: &mut Consumer<'_, TxEvent>,
         slot: &mut impl Lock<SlotCore>,
     ) {
+        log_error_changes();
         let delivered = self.engine.counters().rx_delivered;
         let (e, h, p) = (&mut self.engine, &mut self.host, &mut self.proto);
         while let Some(ev) = rx.dequeue() {

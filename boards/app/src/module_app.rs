@@ -15,6 +15,8 @@
 // (3) only move registers into lock-free queues; the app (1) polls its nodes; SysTick is
 // set below everything. Only the slot-timer resource is shared across priorities (RTIC
 // priority ceilings: its critical sections are the slot timer's only blocking).
+// `critical_section::with` (topics, status, `run::DUE`) raises BASEPRI to the protocol
+// task's priority only (boards/stm32f103 `ceiling`): it never blocks priorities 3 and 4.
 #[macro_export]
 macro_rules! module_app {
     () => {
@@ -22,6 +24,18 @@ macro_rules! module_app {
 /// produce it exactly).
 const BTR: u32 =
     rtcan_board_stm32f103::can_btr!(rtcan_board_stm32f103::PCLK1_HZ, robot::BUS.bitrate);
+
+// The `priority = ...` literals of the tasks below (RTIC takes literals only) against the
+// one source of the critical-section ceiling, `PROTOCOL_PRIORITY` (boards/stm32f103
+// `ceiling`): the protocol task at it, the slot timer and CAN interrupts above it (they
+// never enter a critical section and are never blocked by one), the app task below.
+const _: () = {
+    use rtcan_board_stm32f103::ceiling::PROTOCOL_PRIORITY;
+    assert!(PROTOCOL_PRIORITY == 2, "the protocol task's `priority = 2` disagrees with PROTOCOL_PRIORITY");
+    assert!(4 > PROTOCOL_PRIORITY, "the slot timer (priority 4) must be above the ceiling");
+    assert!(3 > PROTOCOL_PRIORITY, "the CAN interrupts (priority 3) must be above the ceiling");
+    assert!(1 <= PROTOCOL_PRIORITY, "the app task (priority 1) must be at or below the ceiling");
+};
 
 #[rtic::app(device = rtcan_board_stm32f103::hal::pac, dispatchers = [EXTI2])]
 mod app {
@@ -168,11 +182,8 @@ mod app {
             }
             change
         });
-        match change {
-            rtcan_board_stm32f103::ErrorChange::BusOff => defmt::warn!("bus-off"),
-            rtcan_board_stm32f103::ErrorChange::Recovered => defmt::info!("bus-off recovered"),
-            rtcan_board_stm32f103::ErrorChange::None => {}
-        }
+        // Logged by the protocol task, below the critical-section ceiling.
+        fw::driver::note_error_change(change);
         pend_protocol();
     }
 

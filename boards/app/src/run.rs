@@ -19,8 +19,8 @@ const TICK_NS: Nanos = 1_000_000;
 /// this only bounds a wrong answer.
 const MAX_SLEEP_MS: u32 = 1_000;
 
-/// A flag with the waker of the one task waiting for it (set from the CAN RX
-/// interrupt, awaited by the app task).
+/// A flag with the waker of the one task waiting for it (set by the protocol task,
+/// awaited by the app task: both at or below the critical-section ceiling).
 pub struct Notify {
     raised: Mutex<Cell<bool>>,
     waker: Mutex<Cell<Option<Waker>>>,

@@ -5,7 +5,8 @@
 //! bxCAN time-triggered-mode SOF timestamps mapped to the local clock (`sof`), and the
 //! split interrupt architecture both boards run: prepared slot plans committed by the
 //! slot timer (`slot_plan`, `tx_image`) and the protocol task around the engine
-//! (`protocol`).
+//! (`protocol`), and critical sections that leave the interrupts above the protocol
+//! task's priority unblocked (`ceiling`).
 #![cfg_attr(not(test), no_std)]
 #![cfg_attr(
     test,
@@ -18,6 +19,7 @@
 )]
 
 pub mod bit_timing;
+pub mod ceiling;
 pub mod filters;
 pub mod protocol;
 pub mod slot_plan;

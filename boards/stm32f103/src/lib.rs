@@ -1,7 +1,7 @@
 //! RTCAN driver for the STM32F103 (Cortex-M3, bxCAN), in the split interrupt
 //! architecture of `rtcan_board_common::protocol`: the CAN parts per interrupt (`can`),
 //! the slot timer and local clock on TIM2 (`slot_timer`) and the slot-timer interrupt
-//! body (`glue`). Meant to be driven from RTIC hardware tasks; nothing here is global,
+//! body (`glue`), and the critical sections at the protocol task's priority (`ceiling`). Meant to be driven from RTIC hardware tasks; nothing here is global,
 //! every peripheral is owned by a value.
 //!
 //! Clock tree assumed by the constants: HSE 8 MHz, SYSCLK 72 MHz, PCLK1 36 MHz (the CAN
@@ -9,6 +9,7 @@
 #![no_std]
 
 pub mod can;
+pub mod ceiling;
 pub mod glue;
 pub mod slot_timer;
 

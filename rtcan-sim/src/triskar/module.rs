@@ -41,6 +41,8 @@ pub struct Shared {
     pub params: Option<crate::param::ParamBus>,
     /// The `proximity_read` service: script, calls, answers (`services.rs`).
     pub services: super::services::ServiceLog,
+    /// The module-state topics: what was published and received (`module_state.rs`).
+    pub module_state: super::module_state::StateLog,
 }
 
 /// What the host (ROS) sends through the gateway.
@@ -215,8 +217,11 @@ pub trait Inspect {
     fn srt_events(&mut self) -> &mut [(u8, SrtLog)];
     /// This module's system status (heartbeat ages: the supervision table's input).
     fn status(&self) -> &'static SystemStatus;
-    /// Engine counters and error counters, for the module table's own row.
-    fn health(&self) -> rtcan::pubsub::EngineHealth;
+    /// The health of every module as this module's supervisor last knew it (its own
+    /// included): the rows' counters of a table it would publish now.
+    fn known_health(
+        &self,
+    ) -> Option<[rtcan::pubsub::EngineHealth; rtcan::robot_toml::supervision::MODULES]>;
     /// The module stops executing at this global time (failure injection).
     fn set_dies_at(&mut self, at: Option<Nanos>);
     /// Still executing at global time `g`.
@@ -325,6 +330,8 @@ pub struct SimModule<const RX: usize, const AR: usize, const Q: usize> {
     pub srt_log: Vec<(u8, SrtLog)>,
     /// The module's part in a request/reply service, run after its app.
     pub service: Option<Box<dyn super::services::ServiceHook>>,
+    /// The module's side of the module-state topics, run after its app.
+    pub state_io: Option<super::module_state::StateIo>,
     was_ok: bool,
     trips: u32,
     exits: u32,
@@ -370,6 +377,7 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 .collect(),
             srt_log,
             service: None,
+            state_io: None,
             was_ok: false,
             trips: 0,
             exits: 0,
@@ -438,6 +446,9 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
         }
         if let Some(svc) = self.service.as_mut() {
             svc.reboot(&mut self.shared.borrow_mut());
+        }
+        if let Some(io) = self.state_io.as_mut() {
+            io.reboot();
         }
         // The topics' counters start again from zero; what was pending died with it.
         for (tx, _, seen) in self.srt.iter_mut() {
@@ -522,6 +533,26 @@ impl<const RX: usize, const AR: usize, const Q: usize> SimModule<RX, AR, Q> {
                 .service
                 .as_mut()
                 .and_then(|s| s.poll(now, global, &mut shared));
+            let mut state_next = None;
+            if let Some(io) = self.state_io.as_mut() {
+                let own = rtcan::pubsub::EngineHealth::new(
+                    self.engine.counters(),
+                    &self.engine.error_state(),
+                );
+                let master = self.engine.is_master();
+                state_next = io.poll(
+                    self.status,
+                    own,
+                    master,
+                    now,
+                    global,
+                    &mut shared.module_state,
+                );
+            }
+            let svc = match (svc, state_next) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            };
             (next, svc)
         };
         let app_next = svc_next.map_or(app_next, |s| s.min(app_next));
@@ -669,8 +700,10 @@ impl<const RX: usize, const AR: usize, const Q: usize> Inspect for SimModule<RX,
     fn status(&self) -> &'static SystemStatus {
         self.status
     }
-    fn health(&self) -> rtcan::pubsub::EngineHealth {
-        rtcan::pubsub::EngineHealth::new(self.engine.counters(), &self.engine.error_state())
+    fn known_health(
+        &self,
+    ) -> Option<[rtcan::pubsub::EngineHealth; rtcan::robot_toml::supervision::MODULES]> {
+        self.state_io.as_ref().map(|io| *io.sv.health())
     }
     fn set_dies_at(&mut self, at: Option<Nanos>) {
         self.down = at.map(|a| vec![(a, Nanos::MAX)]).unwrap_or_default();
