@@ -145,6 +145,8 @@ pub struct State {
     sites: Sites,
     /// Stores into the ranges given to `Mcu::watch_writes`, in order.
     pub writes: Vec<WriteRecord>,
+    /// The SRAM's host memory (`Mcu::sram`, mapped into Unicorn with `uc_mem_map_ptr`).
+    sram: *mut u8,
     uc: *mut uc_engine,
 }
 
@@ -178,6 +180,51 @@ impl State {
         // SAFETY: `uc` is the live engine of this state; `v` is a valid u32 out-parameter.
         unsafe { uc_reg_read(self.uc, REG_PC, (&mut v as *mut u32).cast()) };
         v
+    }
+
+    /// The offset in SRAM of `[addr, addr + len)`, if it lies wholly in SRAM.
+    fn sram_offset(addr: u32, len: usize) -> Option<usize> {
+        let off = addr.checked_sub(SRAM_BASE)? as usize;
+        (off.checked_add(len)? <= SRAM_SIZE as usize).then_some(off)
+    }
+
+    /// Reads emulated memory into `buf`: SRAM straight from its host memory (no Unicorn
+    /// call: `uc_mem_read` looks the region up and copies through the address space,
+    /// which was a few % of the CPU time at one exception return per 35 µs per MCU),
+    /// anything else through Unicorn. Unmapped bytes read as 0.
+    fn read_into(&self, addr: u32, buf: &mut [u8]) {
+        if let Some(off) = Self::sram_offset(addr, buf.len()) {
+            // SAFETY: `sram` is the live SRAM_SIZE-byte buffer of this MCU (`Mcu::sram`)
+            // and `off + buf.len() <= SRAM_SIZE`; Unicorn does not run while this copies
+            // (callbacks run on the thread that runs the engine).
+            unsafe {
+                core::ptr::copy_nonoverlapping(self.sram.add(off), buf.as_mut_ptr(), buf.len())
+            };
+            return;
+        }
+        // SAFETY: live engine, `buf` writable for its length.
+        let e =
+            unsafe { uc_mem_read(self.uc, u64::from(addr), buf.as_mut_ptr().cast(), buf.len()) };
+        if e != 0 {
+            buf.fill(0);
+        }
+    }
+
+    /// Writes emulated memory: SRAM straight into its host memory, anything else through
+    /// Unicorn. A direct write does not invalidate translated code, which is right for
+    /// SRAM because no image executes from it (`on_code` faults if one does); and it saves
+    /// the page-collection lock (a GTree, malloc/free) of every `uc_mem_write`.
+    fn write_from(&mut self, addr: u32, bytes: &[u8]) {
+        if let Some(off) = Self::sram_offset(addr, bytes.len()) {
+            // SAFETY: as in `read_into`.
+            unsafe {
+                core::ptr::copy_nonoverlapping(bytes.as_ptr(), self.sram.add(off), bytes.len())
+            };
+            return;
+        }
+        // SAFETY: live engine, `bytes` readable for its length. A write to unmapped
+        // memory is dropped (as the bus would).
+        unsafe { uc_mem_write(self.uc, u64::from(addr), bytes.as_ptr().cast(), bytes.len()) };
     }
 
     fn bus_bit(&self) -> u64 {
@@ -528,6 +575,13 @@ extern "C" fn on_code(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void
         return;
     }
     match st.sites.at(addr as u32) {
+        // Code in SRAM: the emulator writes SRAM without invalidating translated code
+        // (`State::write_from`), so it cannot run code from there. No image does.
+        None if (addr as u32).wrapping_sub(SRAM_BASE) < SRAM_SIZE => {
+            st.fault = Some(format!("code executing from SRAM at {addr:#010x}"));
+            // SAFETY: `uc` is the engine calling this hook.
+            unsafe { uc_emu_stop(uc) };
+        }
         None => {}
         // `b .`: a spin that only an interrupt leaves (RTIC's idle without an idle task).
         // Equivalent to sleeping: time jumps to the next event, PC stays.
@@ -636,7 +690,16 @@ pub struct Mcu {
     pub st: Box<State>,
     image: Vec<elf::Segment>,
     pub rtt: Option<u32>,
+    /// SRAM's host memory (a leaked `Box<[Page]>`, freed by `Drop` after the engine is
+    /// closed), mapped into the engine with `uc_mem_map_ptr`: the emulator reads and
+    /// writes it without a Unicorn call (`State::read_into`), only through raw pointers.
+    sram: *mut [Page],
 }
+
+/// One 4 KiB page of host memory backing emulated RAM (Unicorn maps host memory in
+/// whole pages, page-aligned).
+#[repr(C, align(4096))]
+struct Page([u8; 4096]);
 
 fn check(what: &'static str, e: uc_err) -> Result<(), EmuError> {
     if e == 0 {
@@ -648,8 +711,12 @@ fn check(what: &'static str, e: uc_err) -> Result<(), EmuError> {
 
 impl Drop for Mcu {
     fn drop(&mut self) {
-        // SAFETY: `uc` was opened by `new` and is closed once here.
-        unsafe { uc_close(self.uc) };
+        // SAFETY: `uc` was opened by `new` and is closed once here, before the SRAM it
+        // maps is freed; `sram` came from `Box::into_raw` in `new` and is freed once.
+        unsafe {
+            uc_close(self.uc);
+            drop(Box::from_raw(self.sram));
+        }
     }
 }
 
@@ -671,6 +738,9 @@ impl Mcu {
                 uc_ctl(uc, UC_CTL_CPU_MODEL_WRITE, UC_CPU_ARM_CORTEX_M3),
             )?;
         }
+        let pages: Box<[Page]> = (0..SRAM_SIZE / 4096).map(|_| Page([0; 4096])).collect();
+        let sram = Box::into_raw(pages);
+        let sram_ptr: *mut u8 = sram.cast();
         let mut st = Box::new(State {
             timing,
             instructions: 0,
@@ -709,6 +779,7 @@ impl Mcu {
             bit_ps: 1_000_000,
             sites: Sites::scan(&image),
             writes: Vec::new(),
+            sram: sram_ptr,
             uc,
         });
         st.retime();
@@ -726,7 +797,13 @@ impl Mcu {
             )?;
             check(
                 "map sram",
-                uc_mem_map(uc, u64::from(SRAM_BASE), SRAM_SIZE as usize, UC_PROT_ALL),
+                uc_mem_map_ptr(
+                    uc,
+                    u64::from(SRAM_BASE),
+                    SRAM_SIZE as usize,
+                    UC_PROT_ALL,
+                    sram_ptr.cast(),
+                ),
             )?;
             // Peripherals and system: the offset passed to the callbacks is made absolute
             // by mapping each region at its base and adding the base back (`region` fns).
@@ -792,6 +869,7 @@ impl Mcu {
             st,
             image,
             rtt,
+            sram,
         };
         mcu.reset()?;
         Ok(mcu)
@@ -840,23 +918,20 @@ impl Mcu {
 
     fn mem_read_u32(&self, addr: u32) -> u32 {
         let mut b = [0u8; 4];
-        // SAFETY: live engine, `b` is 4 writable bytes.
-        unsafe { uc_mem_read(self.uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+        self.st.read_into(addr, &mut b);
         u32::from_le_bytes(b)
     }
 
-    /// Reads emulated memory.
+    /// Reads emulated memory (unmapped bytes read as 0).
     pub fn read_mem(&self, addr: u32, len: usize) -> Vec<u8> {
         let mut b = vec![0u8; len];
-        // SAFETY: live engine, `b` has `len` writable bytes.
-        unsafe { uc_mem_read(self.uc, u64::from(addr), b.as_mut_ptr().cast(), len) };
+        self.st.read_into(addr, &mut b);
         b
     }
 
     /// Writes emulated memory (RAM).
     pub fn write_mem(&mut self, addr: u32, bytes: &[u8]) {
-        // SAFETY: live engine, `bytes` readable for its length.
-        unsafe { uc_mem_write(self.uc, u64::from(addr), bytes.as_ptr().cast(), bytes.len()) };
+        self.st.write_from(addr, bytes);
     }
 
     /// One byte arriving on USART1's RX pin (its stop bit ends now): with CR3.DMAR it
@@ -908,18 +983,10 @@ impl Mcu {
         st.base_ps = now;
         st.base_instr = st.instructions;
         st.retime();
-        let zero = vec![0u8; SRAM_SIZE as usize];
+        // SAFETY: `st.sram` is this MCU's SRAM_SIZE-byte buffer (`Mcu::sram`).
+        unsafe { core::ptr::write_bytes(self.st.sram, 0, SRAM_SIZE as usize) };
         // SAFETY: live engine; buffers are valid for their lengths.
         unsafe {
-            check(
-                "clear sram",
-                uc_mem_write(
-                    self.uc,
-                    u64::from(SRAM_BASE),
-                    zero.as_ptr().cast(),
-                    zero.len(),
-                ),
-            )?;
             for seg in &self.image {
                 check(
                     "load",
@@ -991,8 +1058,7 @@ impl Mcu {
             xpsr &= !(1 << 9);
         }
         sp -= 32;
-        // One write of the whole frame: each `uc_mem_write` costs Unicorn a translated-
-        // code invalidation check of the range (malloc/free of a page collection).
+        // One write of the whole frame, straight into SRAM (`State::write_from`).
         let mut bytes = [0u8; 32];
         for (chunk, v) in bytes
             .chunks_exact_mut(4)
@@ -1000,8 +1066,7 @@ impl Mcu {
         {
             chunk.copy_from_slice(&v.to_le_bytes());
         }
-        // SAFETY: live engine, `bytes` is 32 readable bytes.
-        unsafe { uc_mem_write(self.uc, u64::from(sp), bytes.as_ptr().cast(), 32) };
+        self.st.write_from(sp, &bytes);
         self.set_reg(REG_SP, sp);
         // Return to thread mode on the main stack, or to handler mode when nested.
         let exc_return = if self.st.scs.active.is_empty() {
@@ -1026,8 +1091,7 @@ impl Mcu {
     fn exc_return(&mut self) {
         let sp = self.reg(REG_SP);
         let mut bytes = [0u8; 32];
-        // SAFETY: live engine, `bytes` is 32 writable bytes.
-        unsafe { uc_mem_read(self.uc, u64::from(sp), bytes.as_mut_ptr().cast(), 32) };
+        self.st.read_into(sp, &mut bytes);
         let get = |i: usize| {
             bytes
                 .get(4 * i..4 * i + 4)
@@ -1120,8 +1184,13 @@ impl Mcu {
             self.st.budget = self.st.instructions + n.clamp(1, CHUNK) + 1;
             self.st.scs.reschedule = false;
             let pc = self.reg(REG_PC);
+            // `until` = 0, an address no image executes (the vector table's initial SP):
+            // at the end of every run Unicorn 2.0.1 invalidates the translated code around
+            // the `until` address unless it is 0 (`resume_all_vcpus`), which costs a page
+            // collection (a GTree, malloc/free) per run — measured ≈ 5 % of the CPU time
+            // with 0xFFFF_FFFF. A run that does reach address 0 is reported as a fault below.
             // SAFETY: live engine.
-            let e = unsafe { uc_emu_start(self.uc, u64::from(pc | 1), 0xFFFF_FFFF, 0, 0) };
+            let e = unsafe { uc_emu_start(self.uc, u64::from(pc | 1), 0, 0, 0) };
             let sl = &mut self.st.slices;
             if self.st.exc_return {
                 sl.exc_return += 1;
@@ -1159,6 +1228,14 @@ impl Mcu {
             }
             if let Some(f) = &self.st.fault {
                 return Err(format!("{}: {f}", self.name));
+            }
+            // A branch to address 0 (the `until` above): Unicorn halted before executing
+            // there. The chip would fetch the initial SP as an instruction; no image does it.
+            if e == 0 && !self.st.wfi && self.reg(REG_PC) & !1 == 0 {
+                return Err(format!(
+                    "{}: branch to address 0 after {} instructions",
+                    self.name, self.st.instructions
+                ));
             }
             if e != 0 && !self.st.wfi {
                 let pc = self.reg(REG_PC);
@@ -1222,26 +1299,26 @@ extern "C" fn write_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, v: u64,
     }
 }
 
-extern "C" fn read_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, _ud: *mut c_void) -> u64 {
+extern "C" fn read_bb_sram(_uc: *mut uc_engine, off: u64, _size: u32, ud: *mut c_void) -> u64 {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(SRAM_BASE, off);
     let mut b = [0u8; 4];
-    // SAFETY: `uc` is the engine calling back; `b` has 4 writable bytes.
-    unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+    st.read_into(addr, &mut b);
     u64::from((u32::from_le_bytes(b) >> bit) & 1)
 }
 
-extern "C" fn write_bb_sram(uc: *mut uc_engine, off: u64, _size: u32, v: u64, _ud: *mut c_void) {
+extern "C" fn write_bb_sram(_uc: *mut uc_engine, off: u64, _size: u32, v: u64, ud: *mut c_void) {
+    // SAFETY: as in `mmio_read`.
+    let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(SRAM_BASE, off);
     let mut b = [0u8; 4];
-    // SAFETY: as in `read_bb_sram`.
-    unsafe { uc_mem_read(uc, u64::from(addr), b.as_mut_ptr().cast(), 4) };
+    st.read_into(addr, &mut b);
     let old = u32::from_le_bytes(b);
     let new = if v & 1 != 0 {
         old | (1 << bit)
     } else {
         old & !(1 << bit)
     };
-    let nb = new.to_le_bytes();
-    // SAFETY: as in `read_bb_sram`.
-    unsafe { uc_mem_write(uc, u64::from(addr), nb.as_ptr().cast(), 4) };
+    st.write_from(addr, &new.to_le_bytes());
 }
