@@ -82,8 +82,10 @@ pub struct Slices {
     pub replan: u64,
     /// WFI or `b .` reached.
     pub sleep: u64,
-    /// An exception return (branch to EXC_RETURN).
+    /// An exception return (branch to EXC_RETURN) that the run loop had to act on.
     pub exc_return: u64,
+    /// Exception returns done inside the run (`State::return_in_run`): not run ends.
+    pub returns_in_run: u64,
     /// A fault or anything else.
     pub other: u64,
 }
@@ -105,6 +107,8 @@ pub struct State {
     stop_at: Option<u32>,
     /// What set `budget` last (why the current run will end there).
     budget_why: Why,
+    /// The emulated time (ps) the current `run_until` runs to.
+    run_end: u64,
     /// Unicorn runs (`uc_emu_start`) by what ended them: the emulator's own cost.
     pub slices: Slices,
     pub scs: Scs,
@@ -628,6 +632,10 @@ extern "C" fn on_intr(uc: *mut uc_engine, intno: u32, ud: *mut c_void) {
     // (UDF of a panic, bad instruction): reported, not modelled as HardFault.
     let pc = st.pc();
     if pc >= 0xFFFF_FF00 {
+        if st.return_in_run() {
+            st.slices.returns_in_run += 1;
+            return;
+        }
         st.exc_return = true;
     } else {
         st.fault = Some(format!("CPU exception {intno} at pc {pc:#010x}"));
@@ -751,6 +759,7 @@ impl Mcu {
             stop_at: None,
             resume_pc: None,
             budget_why: Why::Until,
+            run_end: 0,
             slices: Slices::default(),
             scs: Scs::default(),
             rcc: Rcc::default(),
@@ -1021,120 +1030,19 @@ impl Mcu {
         self.st.now()
     }
 
-    /// Interrupt lines of the peripherals into the NVIC (`State::raise_lines`), and the
-    /// core's state for the slot probe when TIM2's line rose.
+    /// `State::raise_irqs`.
     fn raise_irqs(&mut self) {
-        let core = (
-            self.reg(REG_PC),
-            self.reg(REG_PRIMASK) & 1 != 0,
-            self.reg(REG_BASEPRI) as u8,
-        );
-        let st = &mut self.st;
-        st.raise_lines();
-        let active = st.scs.active.last().copied().unwrap_or(0);
-        st.probe.core_at_rise(core.0, core.1, core.2, active);
+        self.st.raise_irqs();
     }
 
-    /// Exception entry (ARMv7-M B1.5.6): stacks R0-R3, R12, LR, return address, xPSR on
-    /// the main stack (8-byte aligned, bit 9 of the stacked xPSR records the padding),
-    /// LR = EXC_RETURN, PC = vector.
-    fn enter(&mut self, exc: u16) {
-        let mut sp = self.reg(REG_SP);
-        let mut xpsr = self.reg(REG_XPSR);
-        let pc = self.reg(REG_PC);
-        let frame = [
-            self.reg(REG_R0),
-            self.reg(REG_R0 + 1),
-            self.reg(REG_R0 + 2),
-            self.reg(REG_R0 + 3),
-            self.reg(REG_R12),
-            self.reg(REG_LR),
-            pc,
-        ];
-        if sp & 4 != 0 {
-            sp -= 4;
-            xpsr |= 1 << 9;
-        } else {
-            xpsr &= !(1 << 9);
-        }
-        sp -= 32;
-        // One write of the whole frame, straight into SRAM (`State::write_from`).
-        let mut bytes = [0u8; 32];
-        for (chunk, v) in bytes
-            .chunks_exact_mut(4)
-            .zip(frame.iter().copied().chain([xpsr | (1 << 24)]))
-        {
-            chunk.copy_from_slice(&v.to_le_bytes());
-        }
-        self.st.write_from(sp, &bytes);
-        self.set_reg(REG_SP, sp);
-        // Return to thread mode on the main stack, or to handler mode when nested.
-        let exc_return = if self.st.scs.active.is_empty() {
-            0xFFFF_FFF9
-        } else {
-            0xFFFF_FFF1
-        };
-        self.set_reg(REG_LR, exc_return);
-        let vector = self.mem_read_u32(self.st.scs.vtor + 4 * u32::from(exc));
-        self.set_reg(REG_PC, vector & !1);
-        self.st.scs.activate(exc);
-        *self.st.taken.entry(exc).or_insert(0) += 1;
-        let ps = self.cycles_ps(self.st.timing.exception_cycles);
-        self.st.add_time(ps);
-    }
-
-    fn cycles_ps(&self, cycles: u64) -> u64 {
-        cycles * PS / self.st.rcc.hclk().max(1)
-    }
-
-    /// Exception return (B1.5.8): unstacks the frame and ends the active exception.
+    /// `State::exc_return`.
     fn exc_return(&mut self) {
-        let sp = self.reg(REG_SP);
-        let mut bytes = [0u8; 32];
-        self.st.read_into(sp, &mut bytes);
-        let get = |i: usize| {
-            bytes
-                .get(4 * i..4 * i + 4)
-                .and_then(|b| b.try_into().ok())
-                .map_or(0, u32::from_le_bytes)
-        };
-        for (i, r) in [REG_R0, REG_R0 + 1, REG_R0 + 2, REG_R0 + 3, REG_R12, REG_LR]
-            .iter()
-            .enumerate()
-        {
-            self.set_reg(*r, get(i));
-        }
-        self.set_reg(REG_PC, get(6) & !1);
-        let xpsr = get(7);
-        self.set_reg(REG_XPSR, xpsr & !0x1FF);
-        let pad = if xpsr & (1 << 9) != 0 { 4 } else { 0 };
-        self.set_reg(REG_SP, sp + 32 + pad);
-        self.st.scs.deactivate();
-        if !self.st.scs.active.contains(&crate::probe::EXC_TIM2) {
-            self.st.probe.timer_isr_done();
-        }
-        let ps = self.cycles_ps(self.st.timing.exception_cycles);
-        self.st.add_time(ps);
-        if self.st.scs.active.is_empty() && self.st.scs.sleep_on_exit() {
-            self.st.wfi = true;
-        }
+        self.st.exc_return();
     }
 
+    /// `State::take_pending`.
     fn take_pending(&mut self) -> bool {
-        let primask = self.reg(REG_PRIMASK) & 1 != 0;
-        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
-        let basepri = self.reg(REG_BASEPRI) as u8;
-        let exec = self.st.scs.execution_priority(primask, faultmask, basepri);
-        if let Some(exc) = self.st.scs.next_exception(exec) {
-            self.st.wfi = false;
-            self.enter(exc);
-            return true;
-        }
-        // WFI wakes on any pending interrupt even when masked by PRIMASK (B1.5.19).
-        if self.st.wfi && self.st.scs.next_exception(256).is_some() {
-            self.st.wfi = false;
-        }
-        false
+        self.st.take_pending()
     }
 
     /// The next time (ps) a peripheral changes an interrupt line by itself.
@@ -1144,7 +1052,6 @@ impl Mcu {
 
     /// Runs until emulated time `until` (ps), or a fault.
     pub fn run_until(&mut self, until: u64) -> Result<(), String> {
-        const CHUNK: u64 = 2_000;
         while self.st.now() < until {
             if let Some(f) = &self.st.fault {
                 return Err(f.clone());
@@ -1171,18 +1078,7 @@ impl Mcu {
                 self.st.asleep_ps += next - now;
                 continue;
             }
-            let event = self.next_event().filter(|&e| e < until);
-            let horizon = event.unwrap_or(until);
-            let left = horizon.saturating_sub(self.st.now());
-            let n = (left as f64 / self.st.instr_ps.max(1.0)) as u64;
-            self.st.budget_why = match event {
-                _ if n > CHUNK => Why::Chunk,
-                Some(_) => Why::Event,
-                None => Why::Until,
-            };
-            // n instructions execute; the hook of the next one ends the run.
-            self.st.budget = self.st.instructions + n.clamp(1, CHUNK) + 1;
-            self.st.scs.reschedule = false;
+            self.st.plan_run(until);
             let pc = self.reg(REG_PC);
             // `until` = 0, an address no image executes (the vector table's initial SP):
             // at the end of every run Unicorn 2.0.1 invalidates the translated code around
@@ -1246,6 +1142,188 @@ impl Mcu {
             }
         }
         Ok(())
+    }
+}
+
+/// Exception entry and return, here rather than on `Mcu` so that `on_intr` can do an
+/// exception return inside a run (`State::return_in_run`).
+impl State {
+    /// The instruction budget of the next run, from now towards `until` (ps): up to the
+    /// next peripheral event, at most `CHUNK` instructions.
+    fn plan_run(&mut self, until: u64) {
+        const CHUNK: u64 = 2_000;
+        self.run_end = until;
+        let event = self.next_event().filter(|&e| e < until);
+        let horizon = event.unwrap_or(until);
+        let left = horizon.saturating_sub(self.now());
+        let n = (left as f64 / self.instr_ps.max(1.0)) as u64;
+        self.budget_why = match event {
+            _ if n > CHUNK => Why::Chunk,
+            Some(_) => Why::Event,
+            None => Why::Until,
+        };
+        // n instructions execute; the hook of the next one ends the run.
+        self.budget = self.instructions + n.clamp(1, CHUNK) + 1;
+        self.scs.reschedule = false;
+    }
+
+    /// An exception return met inside a run (`on_intr`): done there, and the run goes
+    /// on, when `run_until` would start the next run straight after it (no sleep, no
+    /// reset, no end of the caller's time, no transmit request the bus waits for). It
+    /// does what the loop does between the two runs — the return, the interrupt lines,
+    /// tail-chaining into a pending exception, the next budget — at the same emulated
+    /// time, so timing is unchanged; what it saves is ending and restarting a Unicorn
+    /// run (about a third of all runs ended at an exception return). Returns false, with
+    /// nothing done, when the loop must act.
+    fn return_in_run(&mut self) -> bool {
+        let after = self.now() + self.cycles_ps(self.timing.exception_cycles);
+        let loop_needed = after >= self.run_end
+            || self.fault.is_some()
+            || self.wfi
+            || self.stop_at.is_some()
+            || self.resume_pc.is_some()
+            || (self.stop_on_txrq && self.txrq_at.is_some())
+            || self.scs.reset_request
+            || self.iwdg.deadline.is_some_and(|d| d <= after)
+            // Sleep-on-exit after the last active exception.
+            || (self.scs.active.len() <= 1 && self.scs.sleep_on_exit());
+        if loop_needed {
+            return false;
+        }
+        // The PC writes below restart Unicorn's translation loop at the new PC (it sets
+        // `quit_request`), which is what a return inside the run needs.
+        self.exc_return();
+        self.raise_irqs();
+        self.take_pending();
+        self.plan_run(self.run_end);
+        true
+    }
+
+    fn set_reg(&mut self, r: i32, v: u32) {
+        // SAFETY: live engine, valid in-pointer.
+        unsafe { uc_reg_write(self.uc, r, (&v as *const u32).cast()) };
+    }
+
+    fn read_u32(&self, addr: u32) -> u32 {
+        let mut b = [0u8; 4];
+        self.read_into(addr, &mut b);
+        u32::from_le_bytes(b)
+    }
+
+    /// Interrupt lines of the peripherals into the NVIC (`State::raise_lines`), and the
+    /// core's state for the slot probe when TIM2's line rose.
+    fn raise_irqs(&mut self) {
+        let core = (
+            self.reg(REG_PC),
+            self.reg(REG_PRIMASK) & 1 != 0,
+            self.reg(REG_BASEPRI) as u8,
+        );
+        self.raise_lines();
+        let active = self.scs.active.last().copied().unwrap_or(0);
+        self.probe.core_at_rise(core.0, core.1, core.2, active);
+    }
+
+    /// Exception entry (ARMv7-M B1.5.6): stacks R0-R3, R12, LR, return address, xPSR on
+    /// the main stack (8-byte aligned, bit 9 of the stacked xPSR records the padding),
+    /// LR = EXC_RETURN, PC = vector.
+    fn enter(&mut self, exc: u16) {
+        let mut sp = self.reg(REG_SP);
+        let mut xpsr = self.reg(REG_XPSR);
+        let pc = self.reg(REG_PC);
+        let frame = [
+            self.reg(REG_R0),
+            self.reg(REG_R0 + 1),
+            self.reg(REG_R0 + 2),
+            self.reg(REG_R0 + 3),
+            self.reg(REG_R12),
+            self.reg(REG_LR),
+            pc,
+        ];
+        if sp & 4 != 0 {
+            sp -= 4;
+            xpsr |= 1 << 9;
+        } else {
+            xpsr &= !(1 << 9);
+        }
+        sp -= 32;
+        // One write of the whole frame, straight into SRAM (`State::write_from`).
+        let mut bytes = [0u8; 32];
+        for (chunk, v) in bytes
+            .chunks_exact_mut(4)
+            .zip(frame.iter().copied().chain([xpsr | (1 << 24)]))
+        {
+            chunk.copy_from_slice(&v.to_le_bytes());
+        }
+        self.write_from(sp, &bytes);
+        self.set_reg(REG_SP, sp);
+        // Return to thread mode on the main stack, or to handler mode when nested.
+        let exc_return = if self.scs.active.is_empty() {
+            0xFFFF_FFF9
+        } else {
+            0xFFFF_FFF1
+        };
+        self.set_reg(REG_LR, exc_return);
+        let vector = self.read_u32(self.scs.vtor + 4 * u32::from(exc));
+        // Bit 0 set: Thumb (a PC write also sets Unicorn's Thumb state, see `return_in_run`).
+        self.set_reg(REG_PC, vector | 1);
+        self.scs.activate(exc);
+        *self.taken.entry(exc).or_insert(0) += 1;
+        let ps = self.cycles_ps(self.timing.exception_cycles);
+        self.add_time(ps);
+    }
+
+    fn cycles_ps(&self, cycles: u64) -> u64 {
+        cycles * PS / self.rcc.hclk().max(1)
+    }
+
+    /// Exception return (B1.5.8): unstacks the frame and ends the active exception.
+    fn exc_return(&mut self) {
+        let sp = self.reg(REG_SP);
+        let mut bytes = [0u8; 32];
+        self.read_into(sp, &mut bytes);
+        let get = |i: usize| {
+            bytes
+                .get(4 * i..4 * i + 4)
+                .and_then(|b| b.try_into().ok())
+                .map_or(0, u32::from_le_bytes)
+        };
+        for (i, r) in [REG_R0, REG_R0 + 1, REG_R0 + 2, REG_R0 + 3, REG_R12, REG_LR]
+            .iter()
+            .enumerate()
+        {
+            self.set_reg(*r, get(i));
+        }
+        self.set_reg(REG_PC, get(6) | 1);
+        let xpsr = get(7);
+        self.set_reg(REG_XPSR, xpsr & !0x1FF);
+        let pad = if xpsr & (1 << 9) != 0 { 4 } else { 0 };
+        self.set_reg(REG_SP, sp + 32 + pad);
+        self.scs.deactivate();
+        if !self.scs.active.contains(&crate::probe::EXC_TIM2) {
+            self.probe.timer_isr_done();
+        }
+        let ps = self.cycles_ps(self.timing.exception_cycles);
+        self.add_time(ps);
+        if self.scs.active.is_empty() && self.scs.sleep_on_exit() {
+            self.wfi = true;
+        }
+    }
+
+    fn take_pending(&mut self) -> bool {
+        let primask = self.reg(REG_PRIMASK) & 1 != 0;
+        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
+        let basepri = self.reg(REG_BASEPRI) as u8;
+        let exec = self.scs.execution_priority(primask, faultmask, basepri);
+        if let Some(exc) = self.scs.next_exception(exec) {
+            self.wfi = false;
+            self.enter(exc);
+            return true;
+        }
+        // WFI wakes on any pending interrupt even when masked by PRIMASK (B1.5.19).
+        if self.wfi && self.scs.next_exception(256).is_some() {
+            self.wfi = false;
+        }
+        false
     }
 }
 
