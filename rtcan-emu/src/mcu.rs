@@ -135,6 +135,8 @@ pub struct State {
     pub probe: crate::probe::SlotProbe,
     /// Exceptions taken, by exception number.
     pub taken: std::collections::BTreeMap<u16, u64>,
+    /// Exception entries (time ps, exception number), when `Mcu::trace_exceptions` is on.
+    pub entries: Option<Vec<(u64, u16)>>,
     /// Emulated time spent asleep (WFI / sleep-on-exit), ps.
     pub asleep_ps: u64,
     /// Resets (power-on, NRST, watchdog, SYSRESETREQ) since creation.
@@ -779,6 +781,7 @@ impl Mcu {
             unknown_count: 0,
             probe: crate::probe::SlotProbe::default(),
             taken: Default::default(),
+            entries: None,
             asleep_ps: 0,
             resets: 0,
             exc_return: false,
@@ -906,6 +909,11 @@ impl Mcu {
                 ),
             )
         }
+    }
+
+    /// Records every exception entry from now on (`State::entries`; diagnostics).
+    pub fn trace_exceptions(&mut self) {
+        self.st.entries.get_or_insert_with(Vec::new);
     }
 
     /// Program counter.
@@ -1268,6 +1276,10 @@ impl State {
         self.set_reg(REG_PC, vector | 1);
         self.scs.activate(exc);
         *self.taken.entry(exc).or_insert(0) += 1;
+        let now = self.now();
+        if let Some(e) = self.entries.as_mut() {
+            e.push((now, exc));
+        }
         let ps = self.cycles_ps(self.timing.exception_cycles);
         self.add_time(ps);
     }
