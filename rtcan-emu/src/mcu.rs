@@ -195,9 +195,8 @@ impl State {
     }
 
     /// Reads emulated memory into `buf`: SRAM straight from its host memory (no Unicorn
-    /// call: `uc_mem_read` looks the region up and copies through the address space,
-    /// which was a few % of the CPU time at one exception return per 35 µs per MCU),
-    /// anything else through Unicorn. Unmapped bytes read as 0.
+    /// call: `uc_mem_read` looks the region up and copies through the address space, at
+    /// every exception return), anything else through Unicorn. Unmapped bytes read as 0.
     fn read_into(&self, addr: u32, buf: &mut [u8]) {
         if let Some(off) = Self::sram_offset(addr, buf.len()) {
             // SAFETY: `sram` is the live SRAM_SIZE-byte buffer of this MCU (`Mcu::sram`)
@@ -1091,8 +1090,9 @@ impl Mcu {
             // `until` = 0, an address no image executes (the vector table's initial SP):
             // at the end of every run Unicorn 2.0.1 invalidates the translated code around
             // the `until` address unless it is 0 (`resume_all_vcpus`), which costs a page
-            // collection (a GTree, malloc/free) per run — measured ≈ 5 % of the CPU time
-            // with 0xFFFF_FFFF. A run that does reach address 0 is reported as a fault below.
+            // collection (a GTree, malloc/free) per run; malloc/free were ≈ 9 % of a
+            // perf profile with 0xFFFF_FFFF, part of it from here. A run that does reach
+            // address 0 is reported as a fault below.
             // SAFETY: live engine.
             let e = unsafe { uc_emu_start(self.uc, u64::from(pc | 1), 0, 0, 0) };
             let sl = &mut self.st.slices;
