@@ -81,5 +81,6 @@ fn runs_json(s: &crate::mcu::Slices) -> Value {
         "total": s.event + s.until + s.chunk + s.unmask + s.replan + s.sleep + s.exc_return + s.other,
         "event": s.event, "until": s.until, "chunk": s.chunk, "unmask": s.unmask,
         "replan": s.replan, "sleep": s.sleep, "exc_return": s.exc_return, "other": s.other,
+        "returns_in_run": s.returns_in_run,
     })
 }

@@ -40,6 +40,13 @@ extern "C" {
     pub fn uc_close(uc: *mut uc_engine) -> uc_err;
     pub fn uc_ctl(uc: *mut uc_engine, control: u32, ...) -> uc_err;
     pub fn uc_mem_map(uc: *mut uc_engine, address: u64, size: usize, perms: u32) -> uc_err;
+    pub fn uc_mem_map_ptr(
+        uc: *mut uc_engine,
+        address: u64,
+        size: usize,
+        perms: u32,
+        ptr: *mut c_void,
+    ) -> uc_err;
     pub fn uc_mmio_map(
         uc: *mut uc_engine,
         address: u64,
