@@ -110,7 +110,22 @@ fn update_lock_then_add_a_module() {
         .lines()
         .filter(|l| l.starts_with("retired"))
         .collect();
-    assert_eq!(retired, ["retired 0x0150", "retired 0x0151"]);
+    // Each with the topic it carried and its layout then (the old lock's line), so the
+    // host tools can name a stale image's frames.
+    let was = |name: &str| {
+        let l = lock
+            .lines()
+            .find(|l| l.starts_with(&format!("topic {name} ")))
+            .unwrap();
+        let w: Vec<&str> = l.split_whitespace().collect();
+        format!("retired {} {name} {}", w[2], w[3])
+    };
+    assert_eq!(
+        retired,
+        [was("module_state_gateway"), was("module_state_motor1")]
+    );
+    assert!(retired[0].starts_with("retired 0x0150 module_state_gateway ModuleState{"));
+    assert!(retired[1].starts_with("retired 0x0151 module_state_motor1 ModuleState{"));
     // A damaged lock is refused with its line.
     std::fs::write(
         dir.join("robot.lock"),
