@@ -104,10 +104,10 @@ pub struct NodeTask {
     /// RTIC priority.
     pub priority: u8,
     /// Whether the engine's deliveries wake it (it subscribes to a topic published on
-    /// another module).
+    /// another module and publishes no HRT topic: an HRT publisher runs on its slots).
     pub on_delivery: bool,
-    /// Positions (in this list) of the local nodes subscribing to what it publishes:
-    /// its task wakes theirs after each poll.
+    /// Positions (in this list) of the local nodes subscribing to what it publishes
+    /// (HRT publishers excepted): its task wakes theirs after each poll.
     pub wakes: Vec<usize>,
 }
 
@@ -120,18 +120,29 @@ pub fn node_tasks(plan: &Plan, module: usize) -> Vec<NodeTask> {
     let mut order = crate::apps::poll_order(plan, module);
     // Stable: equal priorities keep the poll order.
     order.sort_by_key(|&n| at(n));
+    // A node publishing an HRT topic is synchronous (R2P §3.4.5): its task runs on its
+    // slots' clock and takes the latest samples when due, so neither deliveries nor local
+    // publishers wake it (each wake-up would be a poll that finds nothing due, stealing
+    // the lead time of the lower-priority HRT publishers it preempts).
+    let synchronous = |n: usize| {
+        plan.topics
+            .iter()
+            .any(|t| t.publisher == n && t.class == rtcan_core::Class::Hrt)
+    };
     order
         .iter()
         .map(|&n| {
-            let on_delivery = plan
-                .topics
-                .iter()
-                .any(|t| t.module != module && t.subscribers.iter().any(|s| s.node == n));
+            let on_delivery = !synchronous(n)
+                && plan
+                    .topics
+                    .iter()
+                    .any(|t| t.module != module && t.subscribers.iter().any(|s| s.node == n));
             let wakes = order
                 .iter()
                 .enumerate()
                 .filter(|&(_, &b)| {
                     b != n
+                        && !synchronous(b)
                         && plan
                             .topics
                             .iter()
