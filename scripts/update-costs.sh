@@ -21,7 +21,9 @@ rows=(isr_slot_timer isr_can_rx isr_can_tx task_rx_process task_sync_slave task_
       task_tx_done critical_section_slot slot_boundary_to_txrq)
 tmp="$(mktemp)"
 trap 'rm -f "$tmp"' EXIT
-# RTIC logical priority of each measured path (boards/app/src/module_app.rs).
+# Priority of each measured path in the CPU model: the order of boards/app/src/driver.rs
+# (slot timer > CAN > protocol > node tasks), written as the model's levels 4 > 3 > 2
+# (the images use RTIC 15 > 14 > 13 above their node band 1..=12; only the order matters).
 declare -A prio=([isr_slot_timer]=4 [isr_can_rx]=3 [isr_can_tx]=3 [task_rx_process]=2
                  [task_sync_slave]=2 [task_prepare_slot]=2 [task_tx_done]=2)
 {

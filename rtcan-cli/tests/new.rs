@@ -66,11 +66,32 @@ fn kapeck_workspace_has_one_image_per_module_and_one_file_per_node() {
     for m in ["gateway", "motor_left", "motor_right", "sonar"] {
         let bin = read(&d.join(format!("firmware/src/bin/{m}.rs")));
         assert!(bin.contains(&format!("use robot::{m} as module;")), "{bin}");
-        assert!(bin.contains("rtcan_app_stm32f103::module_app!();"));
+        assert!(bin.contains(&format!("\nnodes::{m}_app!();\n")), "{bin}");
+        assert!(!bin.contains("type App"), "{bin}");
         let manifest = read(&d.join("firmware/Cargo.toml"));
         assert!(manifest.contains(&format!(
             "[[bin]]\nname = \"{m}\"\npath = \"src/bin/{m}.rs\""
         )));
+    }
+    // Each node an RTIC task at the rank of its robot.toml priority (host 1, sonar_ctrl
+    // 2, pid_* 3 → 1, 2, 3), generated into the nodes crate for the bins.
+    let modules = read(&d.join("nodes/src/modules.rs"));
+    for (m, n, p) in [
+        ("gateway", "host", 1),
+        ("sonar", "sonar_ctrl", 2),
+        ("motor_left", "pid_left", 3),
+        ("motor_right", "pid_right", 3),
+    ] {
+        assert!(
+            modules.contains(&format!("macro_rules! {m}_app {{")),
+            "{modules}"
+        );
+        assert!(
+            modules.contains(&format!(
+                "{{ index: 0, name: node_{n}, priority: {p}, task: nodes::modules::tasks::{n}, "
+            )),
+            "{modules}"
+        );
     }
     // Exactly the four images: no bin for anything else.
     assert_eq!(

@@ -13,7 +13,8 @@
 //! - `nodes::<node>`: each node's handles and module wherever robot.toml places it.
 //!
 //! [`apps`] lays out, for a node crate's build script, one app per module composed of
-//! the nodes robot.toml places there.
+//! the nodes robot.toml places there, and [`rtic_app`] each module's RTIC app: one task
+//! per node at its robot.toml priority.
 #![cfg_attr(
     test,
     allow(
@@ -32,6 +33,7 @@ mod module;
 mod names;
 mod params;
 mod placement;
+pub mod rtic_app;
 pub mod scaffold;
 mod services;
 mod supervision;

@@ -508,6 +508,31 @@ fn modules_rs(plan: &Plan) -> String {
         }
         s.push_str("        t\n    }\n}\n\n");
     }
+    // Each node as the firmware's RTIC task polls it (`new`, `poll(&mut Task, now, hw)`):
+    // the shape of Triskar2's node tasks, so both use the one app skeleton.
+    s.push_str(
+        "/// Each node as its RTIC task in the firmware runs it (`<module>_app!` below).\n\
+         pub mod tasks {\n",
+    );
+    for n in &plan.nodes {
+        s.push_str(&format!(
+            "    /// Node `{0}`.\n    pub mod {0} {{\n        /// The node's state.\n        pub type Task = crate::{0}::{1};\n\n\
+             \x20       /// At power-on.\n        pub const fn new() -> Task {{\n            Task::new()\n        }}\n\n\
+             \x20       /// Runs what is due; returns when it next is (no hardware yet).\n\
+             \x20       pub fn poll<H>(t: &mut Task, now: crate::support::Nanos, _hw: &mut H) -> crate::support::Nanos {{\n\
+             \x20           t.poll(now)\n        }}\n    }}\n",
+            n.name,
+            camel(&n.name)
+        ));
+    }
+    s.push_str("}\n\n");
+    s.push_str(&crate::rtic_app::rtic_app_macros(
+        plan,
+        &crate::rtic_app::RticSpec {
+            tasks: "nodes::modules::tasks",
+            skeleton: "rtcan_app_stm32f103::module_app",
+        },
+    ));
     s
 }
 
@@ -710,19 +735,19 @@ fn image_bin(plan: &Plan, m: &rtcan_model::ModulePlan) -> String {
         .collect();
     format!(
         "// {GENERATED}.\n\
-         //! Module `{n}` ({board}{master}): nodes {nodes}, run by the shared RTIC app\n\
-         //! (`rtcan_app_stm32f103::module_app!`). Node code lives in ../nodes/src.\n\
+         //! Module `{n}` ({board}{master}): nodes {nodes}, each an RTIC task at its\n\
+         //! priority in the shared app (`nodes::{n}_app!`, generated from robot.toml, over\n\
+         //! `rtcan_app_stm32f103::module_app!`). Node code lives in ../nodes/src.\n\
          #![no_std]\n#![no_main]\n\n\
          use nodes::robot;\nuse robot::{n} as module;\nuse rtcan_app_stm32f103 as fw;\n\
-         type App = nodes::modules::{c}App;\ntype Hw = fw::board::NoHw;\nconst NAME: &str = \"{n}\";\n\n\
+         type Hw = fw::board::NoHw;\nconst NAME: &str = \"{n}\";\n\n\
          /// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).\n\
          const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;\n\n\
-         rtcan_app_stm32f103::module_app!();\n",
+         nodes::{n}_app!();\n",
         n = m.name,
         board = m.board.name(),
         master = if m.is_master { ", bus master" } else { "" },
         nodes = if nodes.is_empty() { "none".to_string() } else { nodes.join(", ") },
-        c = camel(&m.name),
     )
 }
 

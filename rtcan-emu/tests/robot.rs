@@ -57,6 +57,81 @@ fn no_faults(r: &EmuRobot) {
     }
 }
 
+/// Issue 14: each node is an RTIC task at its robot.toml priority. Read off every
+/// emulated image's NVIC after boot: the dispatcher interrupt of each node priority
+/// level in use on the module (RTIC gives the lowest level the first dispatcher of
+/// `rtcan_codegen::rtic_app::DISPATCHERS`) is at the rank of the robot.toml priority
+/// (Triskar2's 1, 2, 3 → RTIC 1, 2, 3), the protocol task, the CAN interrupts and the slot
+/// timer above the node band (13, 14, 15), and the unused dispatchers left at 0. With one
+/// app task per module (before), motor1's and proximity's second level was missing.
+#[test]
+fn node_tasks_run_at_their_robot_toml_priorities() {
+    let mut robot = robot(HostScript::default());
+    robot.run_until(20 * MS).unwrap();
+    no_faults(&robot);
+    let plan = plan();
+    let rank = rtcan_codegen::rtic_app::node_priorities(&plan);
+    // STM32F103 IRQ numbers (RM0008 table 63) of the dispatchers, in their order.
+    let dispatcher_irq: Vec<u16> = rtcan_codegen::rtic_app::DISPATCHERS
+        .iter()
+        .map(|d| match *d {
+            "EXTI2" => 8,
+            "EXTI3" => 9,
+            "EXTI4" => 10,
+            "EXTI9_5" => 23,
+            "EXTI15_10" => 40,
+            "EXTI0" => 6,
+            "TAMPER" => 2,
+            "RTC" => 3,
+            "FLASH" => 4,
+            "RCC" => 5,
+            "PVD" => 1,
+            "WWDG" => 0,
+            other => panic!("IRQ number of {other}"),
+        })
+        .collect();
+    // RTIC logical priority p on 4 NVIC bits.
+    let hw = |p: u8| i16::from(16 - p) << 4;
+    let mut seen = Vec::new();
+    for (mi, name) in MODULES.iter().enumerate() {
+        let m = plan.modules.iter().position(|m| m.name == *name).unwrap();
+        let scs = &robot.bus.mcus[mi].st.scs;
+        let prio = |irq: u16| scs.priority(16 + irq);
+        assert_eq!(prio(28), hw(15), "{name}: TIM2, slot timer");
+        for irq in [19, 20, 22] {
+            assert_eq!(prio(irq), hw(14), "{name}: CAN IRQ {irq}");
+        }
+        assert_eq!(prio(7), hw(13), "{name}: EXTI1, protocol task");
+        let mut levels: Vec<u8> = plan
+            .nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.module == m)
+            .map(|(i, _)| rank[i])
+            .collect();
+        levels.sort_unstable();
+        levels.dedup();
+        for (k, &irq) in dispatcher_irq.iter().enumerate() {
+            let want = levels.get(k).map_or(0, |&l| hw(l));
+            assert_eq!(prio(irq), want, "{name}: dispatcher IRQ {irq}");
+        }
+        seen.push((*name, levels));
+    }
+    // Triskar2's robot.toml, spelled out: both nodes of motor1 (kinematics 2,
+    // motor_ctrl1 3) and of proximity (ir_ranger 2, obstacle_avoid 3) at their own level.
+    assert_eq!(
+        seen,
+        [
+            ("gateway", vec![1]),
+            ("motor1", vec![2, 3]),
+            ("motor2", vec![1, 3]),
+            ("motor3", vec![3]),
+            ("proximity", vec![2, 3]),
+            ("psu", vec![1]),
+        ]
+    );
+}
+
 /// The simulator's assertions (rtcan-sim/tests/triskar2.rs,
 /// `robot_drives_to_the_wall_and_the_obstacle_node_stops_it_short`) on the emulated
 /// run, through the same report type. Differences in the bounds: none for the robot;

@@ -1,24 +1,37 @@
 //! The protocol task's state (engine, the module's topics as its host, the split
-//! architecture's `Protocol`) and what the app task uses to wake it. The interrupt
-//! priorities (src/module_app.rs):
+//! architecture's `Protocol`), what the node tasks use to wake it, and the interrupt
+//! priorities (RTIC logical, higher preempts; src/module_app.rs):
 //!
 //! | task | priority | work |
 //! |---|---|---|
-//! | `slot_timer` (TIM2) | 4, highest | commit the prepared plan: TXRQ of the slot's frame, aborts |
-//! | `can_rx`, `can_tx`, `can_sce` | 3 | registers into lock-free queues; bus-off: abort all |
-//! | `protocol` (EXTI1) | 2 = `PROTOCOL_PRIORITY`, the critical-section ceiling | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up |
-//! | `module_app` | 1 | the module's nodes, woken at their due times by the protocol task (slot clock) |
-//! | SysTick (monotonic) | lowest | backs up the app task's wake-up |
+//! | `slot_timer` (TIM2) | [`SLOT_TIMER_PRIORITY`] = 15, highest | commit the prepared plan: TXRQ of the slot's frame, aborts |
+//! | `can_rx`, `can_tx`, `can_sce` | [`CAN_PRIORITY`] = 14 | registers into lock-free queues; bus-off: abort all |
+//! | `protocol` (EXTI1) | [`PROTOCOL_PRIORITY`] = 13 | SOF mapping, `Engine::on_rx` / `on_tx_done`, pump, prepare the next wake-up, wake the node tasks |
+//! | one task per node | 1..=[`NODE_PRIORITY_LEVELS`] (12) | the node's `poll`, woken at its due time by the protocol task (slot clock) or by a message for it |
+//! | `idle` | 0 | feeds the watchdog, sleeps (WFI) |
+//! | SysTick (monotonic) | lowest | backs up the node tasks' wake-ups |
+//!
+//! A node's task priority is the rank of its robot.toml `priority` among the distinct
+//! priorities of the robot's nodes (1 = the lowest; Triskar2's 1, 2, 3 stay 1, 2, 3), so
+//! every module of a robot agrees and robot.toml's order is kept; a robot with more than
+//! `NODE_PRIORITY_LEVELS` distinct priorities fails to build (asserted in each image).
+//! The F103's NVIC has 4 priority bits (16 levels): the nodes get 12, and the three above
+//! stay below 16 so RTIC's locks stay BASEPRI writes (RTIC masks the highest level with
+//! PRIMASK).
 //!
 //! Only the slot-timer resource (`glue::Core`: TIM2, plan, TX mailboxes) is shared across
-//! priorities; its critical sections are a few dozen instructions (QEMU row
-//! `critical_section_slot`), the blocking of the slot timer.
+//! the interrupt priorities; its critical sections are a few dozen instructions (QEMU row
+//! `critical_section_slot`), the blocking of the slot timer. Topics (rtcan-pubsub) are
+//! shared by node tasks and the protocol task through `critical_section`: every topic
+//! section is a ceiling lock at most at `PROTOCOL_PRIORITY` (the generated apps assert
+//! each topic's ceiling, the highest priority of its accessors, against it).
 //!
-//! Critical sections (`critical_section::with`: the R2P topics and status, `run::DUE`,
-//! rtic-time's queue) raise BASEPRI to the protocol task's level, `PROTOCOL_PRIORITY`
-//! (boards/stm32f103 `ceiling`); the slot timer and CAN ISRs are never blocked by them and
-//! never enter one (checked on each acquisition). Hence the CAN SCE interrupt leaves its
-//! log lines to the protocol task (`note_error_change`).
+//! Critical sections (`critical_section::with`: the R2P topics and status, the wake-ups in
+//! `run`, rtic-time's queue) raise BASEPRI to the protocol task's level,
+//! `PROTOCOL_PRIORITY` (boards/stm32f103 `ceiling`, the one source of the number); the
+//! slot timer and CAN ISRs are never blocked by them and never enter one (checked on each
+//! acquisition). Hence the CAN SCE interrupt leaves its log lines to the protocol task
+//! (`note_error_change`).
 use core::sync::atomic::{AtomicU8, Ordering};
 
 use heapless::spsc::Consumer;
@@ -37,13 +50,25 @@ use rtcan_core::time::Nanos;
 use rtcan_pubsub::{ModuleHost, SlotGrid};
 
 use crate::cycles;
-use crate::run::{take_due, DELIVERED};
+use crate::run::Wake;
+
+/// RTIC priority of the protocol task (EXTI1), above every node task: the
+/// critical-section ceiling (one source: the board crate's `ceiling`; the generated apps
+/// assert their literals and topic ceilings against it).
+pub use rtcan_board_stm32f103::ceiling::PROTOCOL_PRIORITY;
+
+/// RTIC priority levels of the node tasks (1..=12): every level below the protocol task;
+/// the CAN interrupts and the slot timer sit right above it.
+pub const NODE_PRIORITY_LEVELS: u8 = PROTOCOL_PRIORITY - 1;
+/// RTIC priority of the CAN RX/TX/SCE interrupts: above the protocol task.
+pub const CAN_PRIORITY: u8 = PROTOCOL_PRIORITY + 1;
+/// RTIC priority of the slot timer (TIM2): the highest, below RTIC's PRIMASK level (16).
+pub const SLOT_TIMER_PRIORITY: u8 = CAN_PRIORITY + 1;
+const _: () = assert!(SLOT_TIMER_PRIORITY < 16, "the F103's NVIC has 16 levels");
 
 /// Interrupt of the protocol task (unused by the F103's peripherals in these images).
 pub const PROTOCOL_INTERRUPT: Interrupt = Interrupt::EXTI1;
-/// RTIC priority of the protocol task, the critical-section ceiling (one source: the
-/// board crate's `ceiling`; `module_app!` asserts its literals against it).
-pub use rtcan_board_stm32f103::ceiling::PROTOCOL_PRIORITY;
+
 
 /// Error-state changes the CAN SCE interrupt saw since the protocol task last logged
 /// them (bits `BUS_OFF`, `RECOVERED`): an atomic, so the interrupt logs nothing itself.
@@ -84,12 +109,12 @@ pub const TX_QUEUE: usize = 8;
 /// Drift bound between the local crystal and the bus bit clock, for SOF mapping.
 const DRIFT_PPM: u32 = 200;
 
-/// Pends the protocol task (the app published, a queue has events, an alarm fired).
+/// Pends the protocol task (a node published, a queue has events, an alarm fired).
 pub fn pend_protocol() {
     NVIC::pend(PROTOCOL_INTERRUPT);
 }
 
-/// The app published: the protocol task hands SRT/NRT messages to the engine.
+/// A node published: the protocol task hands SRT/NRT messages to the engine.
 pub fn kick() {
     pend_protocol();
 }
@@ -117,17 +142,21 @@ pub struct Driver<const RX: usize, const ARENA: usize, const Q: usize> {
     /// cycle, and at once when synchronisation is gained or lost).
     grid_until: Nanos,
     grid_synced: bool,
+    /// The module's node tasks' wake-ups (the generated app's statics).
+    wakes: &'static [Wake],
 }
 
 impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
     /// The driver over the module's generated engine and host, at `bitrate`, preparing
-    /// wake-ups half a slot (`slot_ns / 2`) ahead, with SOF times from `stamps`.
+    /// wake-ups half a slot (`slot_ns / 2`) ahead, with SOF times from `stamps`, waking
+    /// the node tasks of `wakes` at their due times.
     pub fn new(
         engine: Engine<'static, RX, ARENA, Q>,
         host: ModuleHost<'static>,
         bitrate: u32,
         slot_ns: Nanos,
         stamps: Stamps,
+        wakes: &'static [Wake],
     ) -> Self {
         let bit_ns = 1_000_000_000 / bitrate.max(1);
         Driver {
@@ -137,11 +166,14 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
             lead_ns: slot_ns / 2,
             grid_until: 0,
             grid_synced: false,
+            wakes,
         }
     }
 
-    /// One run of the protocol task: queued RX events (a delivery wakes the app at once,
-    /// as the simulator runs it), queued TX events, then pump and prepare.
+    /// One run of the protocol task: queued RX events (a delivery wakes the node tasks
+    /// subscribing to remote topics at once, as the simulator runs them), queued TX
+    /// events, then pump and prepare; then the node tasks that are due are woken and the
+    /// prepare alarm set for the earliest one that is not.
     pub fn run(
         &mut self,
         rx: &mut Consumer<'_, RxEvent>,
@@ -181,13 +213,20 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
         cycles::TASK_PREPARE_SLOT.since(t);
         let now = slot.lock(|c| c.timer.now());
         self.refresh_grid(now);
-        let app_due = take_due(now);
-        if app_due.is_ok() || self.engine.counters().rx_delivered != delivered {
-            DELIVERED.notify();
+        let delivered = self.engine.counters().rx_delivered != delivered;
+        let mut earliest = Nanos::MAX;
+        for w in self.wakes {
+            match w.take_due(now) {
+                Ok(_) => w.notify(),
+                Err(due) => {
+                    if delivered && w.on_delivery() {
+                        w.notify();
+                    }
+                    earliest = earliest.min(due);
+                }
+            }
         }
-        if let Err(due) = app_due {
-            self.alarm(due, slot);
-        }
+        self.alarm(earliest, slot);
     }
 
     /// The slot grid into the module's status (where synchronous HRT publishers read
@@ -213,7 +252,7 @@ impl<const RX: usize, const ARENA: usize, const Q: usize> Driver<RX, ARENA, Q> {
         self.host.status().set_grid(grid);
     }
 
-    /// Wakes the protocol task (and so the app) at the app's due time `due` when that
+    /// Wakes the protocol task (and so a node task) at the earliest due time `due` when that
     /// comes before the protocol's own next run (the prepare alarm, half a slot before
     /// the engine's next wake-up): the prepare alarm is re-armed earlier; the protocol
     /// arms its own again when that run finds nothing to prepare.

@@ -1,7 +1,7 @@
 //! What every STM32F103 module image shares, whatever the robot: the RTIC 2 app
-//! ([`module_app!`], invoked by each bin after naming its module, app and hardware),
-//! board start-up ([`board`]), the protocol task's state ([`driver`]), the app task's
-//! sleep and wake-up ([`run`]), the bench counters ([`cycles`]), the SysTick monotonic,
+//! ([`module_app!`], one task per node at its robot.toml priority, invoked through the
+//! module's generated `<module>_app!`), board start-up ([`board`]), the protocol task's
+//! state and the priorities ([`driver`]), the node tasks' sleep and wake-up ([`run`]), the bench counters ([`cycles`]), the SysTick monotonic,
 //! defmt over RTT and the panic handler. Triskar2 (examples/triskar2) and the workspaces
 //! `rtcan new` writes link the same code, so a fix here reaches every robot.
 #![no_std]
@@ -23,9 +23,9 @@ use defmt_rtt as _;
 // formatted message without it.
 use panic_probe as _;
 
-// SysTick monotonic at 1 kHz: backs up the app task's wake-ups (the protocol task
-// wakes it at its due times through the slot timer's prepare alarm, `run::DUE`) and
-// stamps defmt lines. Time stamps and the app's clock come from the slot timer
+// SysTick monotonic at 1 kHz: backs up the node tasks' wake-ups (the protocol task
+// wakes them at their due times through the slot timer's prepare alarm, `run::Wake`)
+// and stamps defmt lines. Time stamps and the nodes' clock come from the slot timer
 // (125 ns ticks, the clock the engine and SOF stamps use).
 rtic_monotonics::systick_monotonic!(Mono, 1_000);
 
@@ -36,3 +36,9 @@ defmt::timestamp!("{=u32:ms}", {
     use rtic_monotonics::Monotonic;
     Mono::now().ticks()
 });
+
+/// The module's hardware as a node task sees it: the RTIC shared resource `hw` of the
+/// module app, locked around each access. A crate giving its nodes hardware defines its
+/// own `Locked` (so it may implement the nodes' hardware traits for it) and re-exports it
+/// as `fw::Locked`; nodes without hardware (the `rtcan new` default) take this one.
+pub struct Locked<M>(pub M);

@@ -9,12 +9,14 @@ use rtcan_board_common::ceiling::basepri_of;
 /// one source of it. The RTIC app's `priority = ...` literals must agree (boards/app
 /// `module_app!` asserts it at compile time): the protocol task and everything below it
 /// may enter critical sections, the CAN interrupts and the slot timer above it may not.
-pub const PROTOCOL_PRIORITY: u8 = 2;
+/// 13: the node tasks get levels 1..=12 below it (boards/app `driver`), the CAN interrupts
+/// 14 and the slot timer 15 above it, all under RTIC's PRIMASK level (16).
+pub const PROTOCOL_PRIORITY: u8 = 13;
 
 /// Priority bits the STM32F103's NVIC implements (4; the PAC's value, which RTIC uses).
 pub const NVIC_PRIO_BITS: u8 = stm32f1xx_hal::pac::NVIC_PRIO_BITS;
 
-/// The ceiling as a BASEPRI value (0xE0 for logical 2).
+/// The ceiling as a BASEPRI value (0x30 for logical 13 with 4 bits).
 pub const CEILING: u8 = basepri_of(PROTOCOL_PRIORITY, NVIC_PRIO_BITS);
 
 #[cfg(all(target_arch = "arm", target_os = "none"))]

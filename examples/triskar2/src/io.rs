@@ -35,6 +35,53 @@ const _: () = assert!(
     "robot.toml declares link topics the gateway firmware does not forward (examples/triskar2/src/io.rs)"
 );
 
+/// The module's hardware as a node task sees it (`fw::Locked`): the RTIC shared
+/// resource of the module app, locked around each access, so two nodes of one module
+/// share it at the ceiling of the ones that use it (a single user's lock is free).
+pub struct Locked<M>(pub M);
+
+impl<M: rtic::Mutex<T = MotorIo>> MotorHw for Locked<M> {
+    fn encoder_count(&mut self) -> u16 {
+        self.0.lock(|h| h.encoder_count())
+    }
+    fn set_duty(&mut self, duty: f32) {
+        self.0.lock(|h| h.set_duty(duty));
+    }
+}
+
+impl<M: rtic::Mutex<T = RangerIo>> ProximityHw for Locked<M> {
+    fn ranges_m(&mut self) -> [f32; 4] {
+        self.0.lock(|h| h.ranges_m())
+    }
+}
+
+impl<M: rtic::Mutex<T = PsuIo>> PsuHw for Locked<M> {
+    fn voltage_v(&mut self) -> f32 {
+        self.0.lock(|h| h.voltage_v())
+    }
+    fn current_a(&mut self) -> f32 {
+        self.0.lock(|h| h.current_a())
+    }
+}
+
+impl<M: rtic::Mutex<T = GatewayIo>> GatewayHw for Locked<M> {
+    fn velocity_command(&mut self, now: Nanos) -> Option<Twist> {
+        self.0.lock(|h| h.velocity_command(now))
+    }
+    fn odometry(&mut self, now: Nanos, m: &msg::Odometry) {
+        self.0.lock(|h| h.odometry(now, m));
+    }
+    fn proximity(&mut self, now: Nanos, m: &msg::Proximity) {
+        self.0.lock(|h| h.proximity(now, m));
+    }
+    fn battery(&mut self, now: Nanos, m: &msg::Battery) {
+        self.0.lock(|h| h.battery(now, m));
+    }
+    fn log(&mut self, now: Nanos, m: &msg::LogLine) {
+        self.0.lock(|h| h.log(now, m));
+    }
+}
+
 /// PWM period in timer ticks: 72 MHz / 3600 = 20 kHz (above hearing, fine for DC motors).
 const PWM_TOP: u16 = 3600;
 

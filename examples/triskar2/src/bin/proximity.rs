@@ -7,11 +7,11 @@
 use robot::proximity as module;
 use rtcan::robot_toml as robot;
 use triskar2_firmware as fw;
-type App = triskar2_nodes::app::ProximityApp;
 type Hw = fw::io::RangerIo;
 const NAME: &str = "proximity";
 
 /// The board has working TTCM (STM32F103: yes; see docs/BRINGUP.md).
 const STAMPS: rtcan_board_stm32f103::common::Stamps = rtcan_board_stm32f103::common::Stamps::Ttcm;
 
-rtcan_app_stm32f103::module_app!();
+// The RTIC app robot.toml lays out for this module: a task per node placed here.
+triskar2_nodes::proximity_app!();
