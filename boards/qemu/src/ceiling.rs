@@ -6,7 +6,8 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use rtcan_board_common::ceiling::{basepri_of, enter, leave};
 
-/// The protocol task's RTIC priority, as on the STM32F103 (the ceiling).
+/// The protocol task's RTIC priority on this 8-level NVIC (the ceiling; the STM32F103
+/// images use 13 of 16 levels, same shape: node tasks below, CAN and slot timer above).
 pub const PROTOCOL_PRIORITY: u8 = 2;
 /// Priority bits the lm3s6965's NVIC implements.
 pub const NVIC_PRIO_BITS: u8 = 3;
