@@ -69,7 +69,6 @@ const _: () = assert!(SLOT_TIMER_PRIORITY < 16, "the F103's NVIC has 16 levels")
 /// Interrupt of the protocol task (unused by the F103's peripherals in these images).
 pub const PROTOCOL_INTERRUPT: Interrupt = Interrupt::EXTI1;
 
-
 /// Error-state changes the CAN SCE interrupt saw since the protocol task last logged
 /// them (bits `BUS_OFF`, `RECOVERED`): an atomic, so the interrupt logs nothing itself.
 static ERROR_CHANGES: AtomicU8 = AtomicU8::new(0);
