@@ -5,9 +5,13 @@
 #   [proximity]
 #   flash = 16384   # bytes: .vector_table + .text + .rodata + .data
 #   ram = 4096      # bytes: .data + .bss + .uninit (static RAM, stack excluded)
+# Also fails when a generated topic static (`robot_toml::<module>::topics::…`) is in
+# .data: its state must start all-zero (.bss), or its initial value is stored in flash
+# a second time (rtcan-pubsub topic.rs, "Flash").
 set -euo pipefail
 budgets=$1; dir=$2
-size="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin/llvm-size"
+tools="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin"
+size="$tools/llvm-size"
 status=0
 printf '%-14s %8s %8s %8s %8s  %s\n' image flash budget ram budget result
 for img in $(sed -n 's/^\[\([A-Za-z0-9_-]*\)\]$/\1/p' "$budgets"); do
@@ -21,5 +25,11 @@ for img in $(sed -n 's/^\[\([A-Za-z0-9_-]*\)\]$/\1/p' "$budgets"); do
     res=ok
     if [ "$flash" -gt "$fb" ] || [ "$ram" -gt "$rb" ]; then res=OVER; status=1; fi
     printf '%-14s %8s %8s %8s %8s  %s\n' "$img" "$flash" "$fb" "$ram" "$rb" "$res"
+    data_topics=$("$tools/llvm-nm" -C "$dir/$img" | awk '$2=="d"||$2=="D"' | grep '::topics::' || true)
+    if [ -n "$data_topics" ]; then
+        echo "$img: topic statics in .data (initial state not all zeros):"
+        echo "$data_topics"
+        status=1
+    fi
 done
 exit $status

@@ -219,7 +219,23 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             #[doc = #doc]
             pub type #alias = ::rtcan::pubsub::Topic<super::super::#ty, { pool::#c }, #s, #q>;
             #[doc = #doc]
-            pub static #c: #alias = ::rtcan::pubsub::Topic::new(::rtcan::pubsub::Remote::#remote, #kick);
+            pub static #c: #alias = ::rtcan::pubsub::Topic::new(&cells::#c, ::rtcan::pubsub::Remote::#remote, #kick);
+        }
+    });
+    // The mutable half of each topic (all-zero initial value, so .bss: no flash copy).
+    let cell_items = locals.iter().map(|l| {
+        let c = names::upper(&l.topic.name);
+        let ty = plan
+            .types
+            .get(l.topic.ty)
+            .map(|t| names::ident(&t.name))
+            .unwrap_or_else(|| names::ident("u8"));
+        let (s, q) = (lit::usize(l.subs.len()), lit::int(l.queue));
+        let doc = format!("State of topic `{}` (used through `topics::{c}`).", l.topic.name);
+        quote! {
+            #[doc = #doc]
+            pub static #c: ::rtcan::pubsub::TopicCells<super::super::super::#ty, { super::pool::#c }, #s, #q> =
+                ::rtcan::pubsub::TopicCells::new();
         }
     });
     let topic_statics: Vec<_> = locals.iter().map(|l| names::upper(&l.topic.name)).collect();
@@ -438,6 +454,11 @@ pub fn module(plan: &Plan, mi: usize, opts: &Options) -> TokenStream {
             /// This module's topics: every topic its nodes publish or subscribe.
             pub mod topics {
                 #(#topic_items)*
+                /// The mutable state of each topic above, zero-initialised (.bss) so
+                /// that it takes no flash; the topic statics are immutable (.rodata).
+                pub mod cells {
+                    #(#cell_items)*
+                }
                 /// Pool blocks per topic (`rtcan::pubsub::pool_blocks`).
                 pub mod pool {
                     #(#pool_consts)*

@@ -3,11 +3,15 @@
 //! `CARGO_TARGET_DIR=/work/tgt/pubsub cargo bench -p rtcan-pubsub --bench pubsub`
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use rtcan_pubsub::bench::{bench_drain, bench_publish_local};
-use rtcan_pubsub::{Remote, Topic};
+use rtcan_pubsub::{Remote, Topic, TopicCells};
 use std::hint::black_box;
 
 fn publish<const N: usize, const S: usize>(c: &mut Criterion, group: &str) {
-    let topic: &'static Topic<u32, N, S, 2> = Box::leak(Box::new(Topic::new(Remote::None, None)));
+    let topic: &'static Topic<u32, N, S, 2> = Box::leak(Box::new(Topic::new(
+        Box::leak(Box::new(TopicCells::new())),
+        Remote::None,
+        None,
+    )));
     let mut g = c.benchmark_group(group);
     g.bench_function(BenchmarkId::new("publish", S), |b| {
         let mut v = 0u32;

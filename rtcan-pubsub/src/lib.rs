@@ -42,4 +42,4 @@ pub use subscriber::{Recv, Subscriber};
 pub use supervision::{
     EngineHealth, ModuleRow, ModuleRule, ModuleTable, OnMissing, Publish, Supervisor,
 };
-pub use topic::{pool_blocks, RecvError, Remote, Topic, TopicStats};
+pub use topic::{pool_blocks, RecvError, Remote, Topic, TopicCells, TopicStats};

@@ -16,6 +16,13 @@
 //! wakers out (in a section of their own) and calls them after it, so a `wake()` that
 //! runs its task at once (and publishes, receives or drops a handle on this very topic)
 //! finds the state free.
+//!
+//! Flash: a topic is two statics. [`TopicCells`] holds every mutable byte and its
+//! initial value is all zeros (pool `used` mask, `Option` indices, `None` wakers), so it
+//! lands in .bss and costs no flash; a non-zero byte would move the whole static to
+//! .data, stored twice (RAM and its flash copy). [`Topic`] holds the immutable
+//! configuration (`Remote`, `kick`) and a reference to its cells: it has no interior
+//! mutability, so it stays in .rodata (12 bytes).
 use core::cell::{RefCell, UnsafeCell};
 use core::mem::MaybeUninit;
 use core::task::Waker;
@@ -26,9 +33,6 @@ use rtcan_core::time::Nanos;
 
 use crate::message::{Message, WireBuf};
 use crate::ring::Ring;
-
-/// No block.
-const NONE: u8 = u8::MAX;
 
 /// How a topic leaves this module (from robot.toml: is there a subscriber on another
 /// module, and which class the topic has on the bus).
@@ -80,7 +84,8 @@ fn bump(c: &mut u32) {
 /// Block ownership. `waker` is the publisher waiting for a free block or for room in
 /// the engine queue (one publisher per topic).
 struct PoolState<const N: usize> {
-    free: u32,
+    /// Bit i: block i is allocated. Zero is "all free", the zeroed initial state.
+    used: u32,
     refs: [u8; N],
     stamps: [Nanos; N],
     waker: Option<Waker>,
@@ -91,15 +96,16 @@ struct PoolState<const N: usize> {
 }
 
 impl<const N: usize> PoolState<N> {
-    const ALL_FREE: u32 = if N >= 32 { u32::MAX } else { (1u32 << N) - 1 };
+    const ALL: u32 = if N >= 32 { u32::MAX } else { (1u32 << N) - 1 };
 
     #[inline(always)]
     fn alloc(&mut self) -> Option<u8> {
-        if self.free == 0 {
+        let free = !self.used & Self::ALL;
+        if free == 0 {
             return None;
         }
-        let idx = self.free.trailing_zeros();
-        self.free &= !(1u32 << idx);
+        let idx = free.trailing_zeros();
+        self.used |= 1u32 << idx;
         // idx < N ≤ 32, so it fits a u8.
         let idx = idx as u8;
         if let Some(r) = self.refs.get_mut(usize::from(idx)) {
@@ -135,7 +141,7 @@ impl<const N: usize> PoolState<N> {
         if let Some(r) = self.refs.get_mut(usize::from(idx)) {
             *r = 0;
         }
-        self.free |= bit(idx);
+        self.used &= !bit(idx);
         self.wake_publisher();
     }
 
@@ -152,7 +158,7 @@ impl<const N: usize> PoolState<N> {
     }
 
     fn free_count(&self) -> usize {
-        self.free.count_ones() as usize
+        (!self.used & Self::ALL).count_ones() as usize
     }
 }
 
@@ -182,10 +188,21 @@ struct RemoteState<const Q: usize> {
     /// Bit i: the bus side (HRT latch, engine queue or the engine) holds one reference
     /// to block i. Guards against a token released twice or never handed out.
     held: u32,
-    latest: u8,
+    /// The latched HRT block (`None` is zero: the initial state stays in .bss).
+    latest: Option<u8>,
     pending: Ring<Q>,
     nothing_flag: bool,
     miss_flag: bool,
+}
+
+impl<const Q: usize> RemoteState<Q> {
+    const EMPTY: Self = RemoteState {
+        held: 0,
+        latest: None,
+        pending: Ring::EMPTY,
+        nothing_flag: false,
+        miss_flag: false,
+    };
 }
 
 struct State<const N: usize, const S: usize, const Q: usize> {
@@ -220,19 +237,83 @@ impl<const N: usize, const S: usize, const Q: usize> State<N, S, Q> {
 /// assigned at compile time) and queues of `Q` messages (also the depth of the queue
 /// towards the engine). Size `N` with [`pool_blocks`].
 ///
-/// `Topic::new` is `const`: `static SPEED: Topic<Speed, 8, 2, 3> = Topic::new(Remote::None, None);`
+/// Both are `const` (see the module doc for why two statics):
+/// ```ignore
+/// static SPEED_CELLS: TopicCells<Speed, 8, 2, 3> = TopicCells::new();
+/// static SPEED: Topic<Speed, 8, 2, 3> = Topic::new(&SPEED_CELLS, Remote::None, None);
+/// ```
 pub struct Topic<T: Message, const N: usize, const S: usize, const Q: usize> {
+    cells: &'static TopicCells<T, N, S, Q>,
+    remote: Remote,
+    kick: Option<fn()>,
+}
+
+/// The mutable part of a [`Topic`]: pool blocks, wire encodings and the bookkeeping.
+/// All-zero initial value (.bss); used only through the `Topic` that refers to it.
+pub struct TopicCells<T: Message, const N: usize, const S: usize, const Q: usize> {
     values: [UnsafeCell<MaybeUninit<T>>; N],
     wire: [UnsafeCell<T::Wire>; N],
     state: Mutex<RefCell<State<N, S, Q>>>,
-    remote: Remote,
-    kick: Option<fn()>,
 }
 
 // SAFETY: the cells are accessed under the ownership discipline in the module doc:
 // a block is written only by its single owner and read only while referenced, and all
 // bookkeeping is inside a critical section. `T: Send` because values cross contexts.
-unsafe impl<T: Message, const N: usize, const S: usize, const Q: usize> Sync for Topic<T, N, S, Q> {}
+unsafe impl<T: Message, const N: usize, const S: usize, const Q: usize> Sync
+    for TopicCells<T, N, S, Q>
+{
+}
+
+impl<T: Message, const N: usize, const S: usize, const Q: usize> TopicCells<T, N, S, Q> {
+    /// Empty cells: every block free, no subscriber message, no counter. All bytes zero.
+    pub const fn new() -> Self {
+        const {
+            assert!(N >= 1 && N <= 32, "a topic pool has 1..=32 blocks");
+            assert!(Q >= 1 && Q <= 255, "queue length 1..=255");
+            assert!(S + 3 <= 255, "refcounts are u8");
+            assert!(
+                core::mem::size_of::<T::Wire>() == T::SIZE,
+                "Message::Wire must be [u8; SIZE]"
+            );
+        }
+        TopicCells {
+            values: [const { UnsafeCell::new(MaybeUninit::uninit()) }; N],
+            wire: [const { UnsafeCell::new(<T::Wire as WireBuf>::ZERO) }; N],
+            state: Mutex::new(RefCell::new(State {
+                pool: PoolState {
+                    used: 0,
+                    refs: [0; N],
+                    stamps: [0; N],
+                    waker: None,
+                    publisher_due: false,
+                    wake_due: false,
+                },
+                subs: [const { SubState::EMPTY }; S],
+                remote: RemoteState::EMPTY,
+                stats: TopicStats {
+                    published: 0,
+                    pool_exhausted: 0,
+                    remote_overflows: 0,
+                    hrt_replaced: 0,
+                    nothing_to_send: 0,
+                    sent: 0,
+                    deadline_misses: 0,
+                    not_submittable: 0,
+                    rx_decode_errors: 0,
+                    rx_dropped: 0,
+                },
+            })),
+        }
+    }
+}
+
+impl<T: Message, const N: usize, const S: usize, const Q: usize> Default
+    for TopicCells<T, N, S, Q>
+{
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 /// Blocks a topic needs so that no publish fails while every queue is full: one per
 /// queued message of each subscriber (`subscribers * queue`), one held by each
@@ -257,52 +338,17 @@ pub enum RecvError {
 }
 
 impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, Q> {
-    /// A topic; `remote` says whether and how it is sent on the bus, `kick` is called
+    /// A topic over `cells` (its own, used by no other topic); `remote` says whether
+    /// and how it is sent on the bus, `kick` is called
     /// (outside any critical section) after a message was queued for the engine, e.g.
     /// to pend the interrupt that runs `ModuleHost::pump`.
-    pub const fn new(remote: Remote, kick: Option<fn()>) -> Self {
-        const {
-            assert!(N >= 1 && N <= 32, "a topic pool has 1..=32 blocks");
-            assert!(Q >= 1 && Q <= 255, "queue length 1..=255");
-            assert!(S + 3 <= 255, "refcounts are u8");
-            assert!(
-                core::mem::size_of::<T::Wire>() == T::SIZE,
-                "Message::Wire must be [u8; SIZE]"
-            );
-        }
+    pub const fn new(
+        cells: &'static TopicCells<T, N, S, Q>,
+        remote: Remote,
+        kick: Option<fn()>,
+    ) -> Self {
         Topic {
-            values: [const { UnsafeCell::new(MaybeUninit::uninit()) }; N],
-            wire: [const { UnsafeCell::new(<T::Wire as WireBuf>::ZERO) }; N],
-            state: Mutex::new(RefCell::new(State {
-                pool: PoolState {
-                    free: PoolState::<N>::ALL_FREE,
-                    refs: [0; N],
-                    stamps: [0; N],
-                    waker: None,
-                    publisher_due: false,
-                    wake_due: false,
-                },
-                subs: [const { SubState::EMPTY }; S],
-                remote: RemoteState {
-                    held: 0,
-                    latest: NONE,
-                    pending: Ring::EMPTY,
-                    nothing_flag: false,
-                    miss_flag: false,
-                },
-                stats: TopicStats {
-                    published: 0,
-                    pool_exhausted: 0,
-                    remote_overflows: 0,
-                    hrt_replaced: 0,
-                    nothing_to_send: 0,
-                    sent: 0,
-                    deadline_misses: 0,
-                    not_submittable: 0,
-                    rx_decode_errors: 0,
-                    rx_dropped: 0,
-                },
-            })),
+            cells,
             remote,
             kick,
         }
@@ -341,13 +387,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
                     st.pool.unref(idx);
                 }
             }
-            st.remote = RemoteState {
-                held: 0,
-                latest: NONE,
-                pending: Ring::EMPTY,
-                nothing_flag: false,
-                miss_flag: false,
-            };
+            st.remote = RemoteState::EMPTY;
             st.pool.waker = None;
             st.pool.publisher_due = false;
             st.pool.wake_due = false;
@@ -364,7 +404,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     #[inline(always)]
     fn with<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
         let (r, due) = critical_section::with(|cs| {
-            let mut st = self.state.borrow_ref_mut(cs);
+            let mut st = self.cells.state.borrow_ref_mut(cs);
             let r = f(&mut st);
             (r, st.pool.wake_due)
         });
@@ -378,7 +418,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// flags), so they make no waker due: no flag to check on the way out.
     #[inline(always)]
     fn with_quiet<R>(&self, f: impl FnOnce(&mut State<N, S, Q>) -> R) -> R {
-        critical_section::with(|cs| f(&mut self.state.borrow_ref_mut(cs)))
+        critical_section::with(|cs| f(&mut self.cells.state.borrow_ref_mut(cs)))
     }
 
     /// Takes the due wakers out one by one, each in a critical section of its own, and
@@ -388,7 +428,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     #[inline(never)]
     fn wake_due(&self) {
         while let Some(w) =
-            critical_section::with(|cs| self.state.borrow_ref_mut(cs).take_one_due())
+            critical_section::with(|cs| self.cells.state.borrow_ref_mut(cs).take_one_due())
         {
             w.wake();
         }
@@ -398,7 +438,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     #[allow(clippy::indexing_slicing)] // idx < N: block indices come only from `PoolState::alloc`
     #[inline(always)]
     pub(crate) fn value_cell(&self, idx: u8) -> &UnsafeCell<MaybeUninit<T>> {
-        &self.values[usize::from(idx)]
+        &self.cells.values[usize::from(idx)]
     }
 
     // ---- pool -------------------------------------------------------------
@@ -438,7 +478,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
             unsafe {
                 let v = (*self.value_cell(idx).get()).assume_init_ref();
                 #[allow(clippy::indexing_slicing)] // idx < N, see value_cell
-                v.encode((*self.wire[usize::from(idx)].get()).as_mut());
+                v.encode((*self.cells.wire[usize::from(idx)].get()).as_mut());
             }
         }
         let mut kick = false;
@@ -456,10 +496,10 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
             match self.remote {
                 Remote::None => {}
                 Remote::Hrt => {
-                    let old = core::mem::replace(&mut st.remote.latest, idx);
+                    let old = st.remote.latest.replace(idx);
                     refs += 1;
                     st.remote.held |= bit(idx);
-                    if old != NONE {
+                    if let Some(old) = old {
                         st.remote.held &= !bit(old);
                         st.pool.unref(old);
                         bump(&mut st.stats.hrt_replaced);
@@ -571,16 +611,14 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
     /// HRT slot: hands the latched block to the engine (its reference moves along).
     pub(crate) fn hrt_take(&self) -> Option<Token> {
         self.with_quiet(|st| {
-            let idx = core::mem::replace(&mut st.remote.latest, NONE);
-            if idx == NONE {
+            let idx = st.remote.latest.take();
+            if idx.is_none() {
                 // Counted here, where it is known; the `NothingToSend` outcome that
                 // follows only raises the flag again, so each empty slot counts once.
                 bump(&mut st.stats.nothing_to_send);
                 st.remote.nothing_flag = true;
-                None
-            } else {
-                Some(Token(u16::from(idx)))
             }
+            idx.map(|i| Token(u16::from(i)))
         })
     }
 
@@ -641,7 +679,7 @@ impl<T: Message, const N: usize, const S: usize, const Q: usize> Topic<T, N, S, 
         let Ok(idx) = u8::try_from(token.0) else {
             return &[];
         };
-        let Some(cell) = self.wire.get(usize::from(idx)) else {
+        let Some(cell) = self.cells.wire.get(usize::from(idx)) else {
             return &[];
         };
         if !self.with_quiet(|st| st.remote.held & bit(idx) != 0) {

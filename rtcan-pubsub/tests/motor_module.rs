@@ -15,7 +15,7 @@
 mod generated {
     use rtcan_pubsub::{
         pool_blocks, Message, ModuleHost, Node, Remote, RxPort, SafetyConfig, SystemStatus, Topic,
-        TxPort,
+        TopicCells, TxPort,
     };
 
     // ---- message types (shared by all modules) ----------------------------
@@ -98,10 +98,18 @@ mod generated {
     pub type StatusTopic = Topic<MotorStatus, { pool_blocks(0, 2, 3, 1) }, 0, 2>;
     pub type LogTopic = Topic<[u8; 8], { pool_blocks(0, 4, 5, 1) }, 0, 4>;
 
-    pub static SPEED3: Speed3Topic = Topic::new(Remote::None, None); // received
-    pub static ENCODER1: EncoderTopic = Topic::new(Remote::Hrt, None);
-    pub static MOTOR1_STATUS: StatusTopic = Topic::new(Remote::Srt, None);
-    pub static LOG: LogTopic = Topic::new(Remote::Nrt, None);
+    pub static SPEED3_CELLS: TopicCells<Speed3, { pool_blocks(1, 2, 0, 1) }, 1, 2> =
+        TopicCells::new();
+    pub static SPEED3: Speed3Topic = Topic::new(&SPEED3_CELLS, Remote::None, None); // received
+    pub static ENCODER1_CELLS: TopicCells<Encoder, { pool_blocks(1, 4, 2, 1) }, 1, 4> =
+        TopicCells::new();
+    pub static ENCODER1: EncoderTopic = Topic::new(&ENCODER1_CELLS, Remote::Hrt, None);
+    pub static MOTOR1_STATUS_CELLS: TopicCells<MotorStatus, { pool_blocks(0, 2, 3, 1) }, 0, 2> =
+        TopicCells::new();
+    pub static MOTOR1_STATUS: StatusTopic = Topic::new(&MOTOR1_STATUS_CELLS, Remote::Srt, None);
+    pub static LOG_CELLS: TopicCells<[u8; 8], { pool_blocks(0, 4, 5, 1) }, 0, 4> =
+        TopicCells::new();
+    pub static LOG: LogTopic = Topic::new(&LOG_CELLS, Remote::Nrt, None);
 
     /// Subscriber slots: `SPEED3` slot 0 = pid, `ENCODER1` slot 0 = pid.
     pub const PID_SPEED3: usize = 0;
@@ -180,16 +188,16 @@ fn local_and_remote_inputs_give_the_same_node_results() {
     ];
 
     // Local: the gateway node runs on this module and publishes directly.
-    let speed_local = Topic::<Speed3, 4, 1, 2>::new(Remote::None, None);
-    let out_local = Topic::<MotorStatus, 4, 1, 2>::new(Remote::None, None);
+    let speed_local = Topic::<Speed3, 4, 1, 2>::new(cells(), Remote::None, None);
+    let out_local = Topic::<MotorStatus, 4, 1, 2>::new(cells(), Remote::None, None);
     for (v, t) in inputs {
         speed_local.publisher().send(v, t).unwrap();
     }
     pid_step(&speed_local.subscriber::<0>(), &out_local.publisher());
 
     // Remote: the same messages arrive as bus payloads through Host::deliver.
-    let speed_remote = Topic::<Speed3, 4, 1, 2>::new(Remote::None, None);
-    let out_remote = Topic::<MotorStatus, 4, 1, 2>::new(Remote::None, None);
+    let speed_remote = Topic::<Speed3, 4, 1, 2>::new(cells(), Remote::None, None);
+    let out_remote = Topic::<MotorStatus, 4, 1, 2>::new(cells(), Remote::None, None);
     let rx: [&dyn rtcan_pubsub::RxPort; 1] = [&speed_remote];
     let status = rtcan_pubsub::SystemStatus::new(rtcan_pubsub::SafetyConfig {
         module: 1,
@@ -439,7 +447,7 @@ fn master_module_needs_no_sync_or_own_heartbeat() {
 
 #[test]
 fn hrt_stream_loss_is_seen_by_the_subscriber_timeout() {
-    let t = Topic::<Encoder, 4, 1, 2>::new(Remote::None, None);
+    let t = Topic::<Encoder, 4, 1, 2>::new(cells(), Remote::None, None);
     let sub = t.subscriber::<0>();
     t.deliver_for_test(Encoder { ticks: 1, dt_us: 1 }, 1_000_000);
     assert!(sub.try_recv_or_stale(1_500_000, 2_000_000).is_ok());
@@ -477,4 +485,10 @@ fn clear_forgets_sync_heartbeats_and_mismatch() {
     assert_eq!(s.safe_reason(), Some(rtcan_pubsub::SafeReason::NoSync));
     assert_eq!(s.module_state(0), None);
     assert_eq!(s.sync_losses(), 0);
+}
+
+/// Fresh cells for a topic made inside a test (leaked: a topic's cells are `'static`).
+fn cells<T: Message, const N: usize, const S: usize, const Q: usize>(
+) -> &'static rtcan_pubsub::TopicCells<T, N, S, Q> {
+    Box::leak(Box::new(rtcan_pubsub::TopicCells::new()))
 }

@@ -11,11 +11,13 @@ use std::task::Poll;
 
 use common::{counting_waker, poll_once, wakes};
 use rtcan_core::driver::{Token, TxOutcome};
-use rtcan_pubsub::{pool_blocks, PoolExhausted, RecvError, Remote, SendError, Topic, TxPort};
+use rtcan_pubsub::{
+    pool_blocks, PoolExhausted, RecvError, Remote, SendError, Topic, TopicCells, TxPort,
+};
 
 #[test]
 fn delivery_order_is_publish_order_for_every_subscriber() {
-    let t = Topic::<u32, 8, 2, 3>::new(Remote::None, None);
+    let t = Topic::<u32, 8, 2, 3>::new(cells(), Remote::None, None);
     let p = t.publisher();
     for (v, now) in [(10, 100), (20, 200), (30, 300)] {
         p.send(v, now).unwrap();
@@ -30,7 +32,7 @@ fn delivery_order_is_publish_order_for_every_subscriber() {
 
 #[test]
 fn local_delivery_is_zero_copy_all_subscribers_share_the_block() {
-    let t = Topic::<[u8; 16], 4, 2, 2>::new(Remote::None, None);
+    let t = Topic::<[u8; 16], 4, 2, 2>::new(cells(), Remote::None, None);
     let p = t.publisher();
     let mut loan = p.alloc([0; 16]).unwrap();
     loan[3] = 7; // filled in place, in the pool block
@@ -47,7 +49,7 @@ fn local_delivery_is_zero_copy_all_subscribers_share_the_block() {
 
 #[test]
 fn pool_exhaustion_is_reported_not_a_panic() {
-    let t = Topic::<u16, 2, 1, 4>::new(Remote::None, None);
+    let t = Topic::<u16, 2, 1, 4>::new(cells(), Remote::None, None);
     let p = t.publisher();
     let a = p.alloc(1).unwrap();
     let _b = p.alloc(2).unwrap();
@@ -61,7 +63,7 @@ fn pool_exhaustion_is_reported_not_a_panic() {
 
 #[test]
 fn memory_returns_to_the_pool_when_the_last_holder_releases() {
-    let t = Topic::<u32, 4, 2, 2>::new(Remote::None, None);
+    let t = Topic::<u32, 4, 2, 2>::new(cells(), Remote::None, None);
     t.publisher().send(5, 0).unwrap();
     assert_eq!(t.free_blocks(), 3);
     let m0 = t.subscriber::<0>().try_recv().unwrap();
@@ -75,7 +77,7 @@ fn memory_returns_to_the_pool_when_the_last_holder_releases() {
 
 #[test]
 fn publish_without_room_anywhere_frees_the_block_at_once() {
-    let t = Topic::<u32, 2, 0, 1>::new(Remote::None, None);
+    let t = Topic::<u32, 2, 0, 1>::new(cells(), Remote::None, None);
     for i in 0..10 {
         t.publisher().send(i, 0).unwrap();
     }
@@ -85,7 +87,7 @@ fn publish_without_room_anywhere_frees_the_block_at_once() {
 #[test]
 fn slow_subscriber_overflows_alone_and_keeps_the_newest() {
     const N: usize = pool_blocks(2, 2, 0, 1);
-    let t = Topic::<u32, N, 2, 2>::new(Remote::None, None);
+    let t = Topic::<u32, N, 2, 2>::new(cells(), Remote::None, None);
     let p = t.publisher();
     let fast = t.subscriber::<0>();
     let slow = t.subscriber::<1>();
@@ -108,7 +110,7 @@ fn slow_subscriber_overflows_alone_and_keeps_the_newest() {
 
 #[test]
 fn async_recv_is_woken_by_publish() {
-    let t = Topic::<u32, 4, 1, 2>::new(Remote::None, None);
+    let t = Topic::<u32, 4, 1, 2>::new(cells(), Remote::None, None);
     let sub = t.subscriber::<0>();
     let (count, waker) = counting_waker();
     let mut fut = sub.recv();
@@ -130,7 +132,7 @@ fn async_recv_is_woken_by_publish() {
 
 #[test]
 fn stale_stream_is_noticed() {
-    let t = Topic::<u32, 4, 1, 2>::new(Remote::None, None);
+    let t = Topic::<u32, 4, 1, 2>::new(cells(), Remote::None, None);
     let sub = t.subscriber::<0>();
     assert_eq!(
         sub.try_recv_or_stale(0, 100).unwrap_err(),
@@ -153,7 +155,7 @@ fn stale_stream_is_noticed() {
 
 #[test]
 fn nrt_back_pressure_returns_the_message_then_waits_for_room() {
-    let t = Topic::<u32, 8, 1, 2>::new(Remote::Nrt, None);
+    let t = Topic::<u32, 8, 1, 2>::new(cells(), Remote::Nrt, None);
     let p = t.publisher();
     let sub = t.subscriber::<0>();
     p.send(1, 0).unwrap();
@@ -180,7 +182,7 @@ fn nrt_back_pressure_returns_the_message_then_waits_for_room() {
 
 #[test]
 fn alloc_wait_is_woken_when_a_block_returns() {
-    let t = Topic::<u32, 1, 1, 1>::new(Remote::None, None);
+    let t = Topic::<u32, 1, 1, 1>::new(cells(), Remote::None, None);
     let p = t.publisher();
     let held = p.alloc(1).unwrap();
     let (count, waker) = counting_waker();
@@ -196,7 +198,7 @@ fn alloc_wait_is_woken_when_a_block_returns() {
 
 #[test]
 fn hrt_latches_latest_and_signals_empty_slots() {
-    let t = Topic::<u32, 4, 1, 2>::new(Remote::Hrt, None);
+    let t = Topic::<u32, 4, 1, 2>::new(cells(), Remote::Hrt, None);
     let p = t.publisher();
     p.send(0x0102_0304, 0).unwrap();
     p.send(0x0A0B_0C0D, 1).unwrap();
@@ -228,7 +230,7 @@ fn hrt_latches_latest_and_signals_empty_slots() {
 
 #[test]
 fn srt_deadline_miss_is_signalled_and_the_block_released() {
-    let t = Topic::<u16, 4, 0, 2>::new(Remote::Srt, None);
+    let t = Topic::<u16, 4, 0, 2>::new(cells(), Remote::Srt, None);
     let p = t.publisher();
     p.send(7, 0).unwrap();
     p.send(8, 0).unwrap();
@@ -249,7 +251,7 @@ fn srt_deadline_miss_is_signalled_and_the_block_released() {
 
 #[test]
 fn srt_full_engine_queue_is_reported_to_the_caller() {
-    let t = Topic::<u16, 8, 1, 1>::new(Remote::Srt, None);
+    let t = Topic::<u16, 8, 1, 1>::new(cells(), Remote::Srt, None);
     let p = t.publisher();
     let sub = t.subscriber::<0>();
     p.send(1, 0).unwrap();
@@ -285,7 +287,7 @@ fn kick_runs_when_a_message_is_queued_for_the_engine() {
     fn kick() {
         KICKS.fetch_add(1, Ordering::SeqCst);
     }
-    let t = Topic::<u8, 4, 0, 1>::new(Remote::Srt, Some(kick));
+    let t = Topic::<u8, 4, 0, 1>::new(cells(), Remote::Srt, Some(kick));
     t.publisher().send(1, 0).unwrap();
     // Queue full: refused, nothing new for the engine.
     assert_eq!(t.publisher().send(2, 0), Err(SendError::QueueFull));
@@ -294,7 +296,7 @@ fn kick_runs_when_a_message_is_queued_for_the_engine() {
 
 #[test]
 fn stale_or_foreign_tokens_do_not_corrupt_the_pool() {
-    let t = Topic::<u32, 4, 1, 2>::new(Remote::Srt, None);
+    let t = Topic::<u32, 4, 1, 2>::new(cells(), Remote::Srt, None);
     t.publisher().send(1, 0).unwrap();
     let tok = t.pending().unwrap();
     t.pending_done(Token(3), true); // not the head: ignored
@@ -312,7 +314,8 @@ fn stale_or_foreign_tokens_do_not_corrupt_the_pool() {
 
 #[test]
 fn statics_work_and_threads_share_a_topic_without_losing_blocks() {
-    static T: Topic<u64, 8, 2, 4> = Topic::new(Remote::None, None);
+    static CELLS: TopicCells<u64, 8, 2, 4> = TopicCells::new();
+    static T: Topic<u64, 8, 2, 4> = Topic::new(&CELLS, Remote::None, None);
     let producer = std::thread::spawn(|| {
         let p = T.publisher();
         let mut sent = 0u64;
@@ -360,7 +363,7 @@ fn statics_work_and_threads_share_a_topic_without_losing_blocks() {
 #[test]
 fn bad_bus_payload_is_counted() {
     use rtcan_pubsub::RxPort;
-    let t = Topic::<u32, 2, 1, 1>::new(Remote::None, None);
+    let t = Topic::<u32, 2, 1, 1>::new(cells(), Remote::None, None);
     t.deliver(&[1, 2, 3], 0);
     assert_eq!(t.stats().rx_decode_errors, 1);
     assert!(t.subscriber::<0>().try_recv().is_none());
@@ -371,7 +374,7 @@ fn bad_bus_payload_is_counted() {
 
 #[test]
 fn nrt_engine_round_trip_returns_blocks() {
-    let t = Topic::<[u8; 8], 10, 0, 4>::new(Remote::Nrt, None);
+    let t = Topic::<[u8; 8], 10, 0, 4>::new(cells(), Remote::Nrt, None);
     for i in 0..4u8 {
         t.publisher().send([i; 8], 40).unwrap();
     }
@@ -386,7 +389,7 @@ fn nrt_engine_round_trip_returns_blocks() {
 #[test]
 fn reset_returns_every_topic_held_block_but_not_live_handles() {
     // 2 subscribers (queue 2), SRT remote: blocks sit in both queues and the bus side.
-    let t = Topic::<u32, 8, 2, 2>::new(Remote::Srt, None);
+    let t = Topic::<u32, 8, 2, 2>::new(cells(), Remote::Srt, None);
     let p = t.publisher();
     p.send(1, 10).unwrap();
     p.send(2, 20).unwrap();
@@ -446,7 +449,8 @@ fn publishing_waker(
 
 #[test]
 fn subscriber_waker_that_publishes_to_the_same_topic_does_not_panic() {
-    static T: Topic<u32, 8, 1, 4> = Topic::new(Remote::None, None);
+    static CELLS: TopicCells<u32, 8, 1, 4> = TopicCells::new();
+    static T: Topic<u32, 8, 1, 4> = Topic::new(&CELLS, Remote::None, None);
     let sub = T.subscriber::<0>();
     let (w, waker) = publishing_waker(&T, 2);
     let mut fut = sub.recv();
@@ -462,7 +466,8 @@ fn subscriber_waker_that_publishes_to_the_same_topic_does_not_panic() {
 
 #[test]
 fn publisher_waker_that_publishes_when_a_block_returns_does_not_panic() {
-    static T: Topic<u32, 8, 1, 4> = Topic::new(Remote::None, None);
+    static CELLS: TopicCells<u32, 8, 1, 4> = TopicCells::new();
+    static T: Topic<u32, 8, 1, 4> = Topic::new(&CELLS, Remote::None, None);
     let p = T.publisher();
     let loans: Vec<_> = (0..8).map(|i| p.alloc(i).unwrap()).collect();
     let (w, waker) = publishing_waker(&T, 42);
@@ -480,7 +485,8 @@ fn publisher_waker_that_publishes_when_a_block_returns_does_not_panic() {
 fn engine_side_wake_that_publishes_does_not_panic() {
     // NRT back-pressure: the publisher waits for room in the engine queue; handing the
     // queued message to the engine wakes it, and the wake publishes again.
-    static T: Topic<u32, 8, 1, 4> = Topic::new(Remote::Nrt, None);
+    static CELLS: TopicCells<u32, 8, 1, 4> = TopicCells::new();
+    static T: Topic<u32, 8, 1, 4> = Topic::new(&CELLS, Remote::Nrt, None);
     let p = T.publisher();
     for v in 0..4 {
         p.send(v, 0).unwrap();
@@ -493,4 +499,10 @@ fn engine_side_wake_that_publishes_does_not_panic() {
     T.pending_done(tok, true);
     assert_eq!(w.calls.load(std::sync::atomic::Ordering::SeqCst), 1);
     assert_eq!(T.stats().published, 5, "the wake's publish went through");
+}
+
+/// Fresh cells for a topic made inside a test (leaked: a topic's cells are `'static`).
+fn cells<T: rtcan_pubsub::Message, const N: usize, const S: usize, const Q: usize>(
+) -> &'static TopicCells<T, N, S, Q> {
+    Box::leak(Box::new(TopicCells::new()))
 }

@@ -12,15 +12,16 @@ use lm3s6965 as _;
 use rtcan_board_qemu::meter::{Stat, SysTickMeter};
 use rtcan_board_qemu::{check, pass};
 use rtcan_pubsub::bench::bench_publish_local;
-use rtcan_pubsub::{pool_blocks, Remote, Topic};
+use rtcan_pubsub::{pool_blocks, Remote, Topic, TopicCells};
 
 /// Publishes per subscriber count.
 const ROUNDS: u32 = 32;
 
 macro_rules! bench_fanout {
     ($meter:expr, $s:literal) => {{
+        static CELLS: TopicCells<u64, { pool_blocks($s, 1, 0, 1) }, $s, 1> = TopicCells::new();
         static TOPIC: Topic<u64, { pool_blocks($s, 1, 0, 1) }, $s, 1> =
-            Topic::new(Remote::None, None);
+            Topic::new(&CELLS, Remote::None, None);
         let (mut publish, mut recv) = (Stat::default(), Stat::default());
         for round in 0..ROUNDS {
             let value = 0x0123_4567_89AB_0000 | u64::from(round);
