@@ -450,12 +450,34 @@ fn defmt_logs_decoded_per_module() {
         }
     }
     eprintln!("synced at (ms): {synced_ms:?}");
-    // Boot to synced: the line is logged at the app's first poll after sync, so the bound
-    // is 3 bus cycles (30 ms) plus the app's poll period (motors: within the cycle,
-    // proximity 40 ms, psu 100 ms; measured 12-13, 42 and 102 ms).
-    for (i, app_period) in [(1, 0), (2, 0), (3, 0), (4, 40), (5, 100)] {
+    // Boot to synced: the line is logged by the module's lowest-priority node task at its
+    // first step after the safe state cleared (synchronised, every module's heartbeat
+    // heard: the `on_missing` rules), so the bound is 3 bus cycles (30 ms) plus that
+    // node's period, the fastest rate robot.toml gives a topic it publishes (motor1's
+    // kinematics 10 ms, motor2's odometry 20 ms, motor3's motor_ctrl3 5 ms, proximity's
+    // ir_ranger 40 ms, psu's battery_monitor 1 s; the gateway's ros_bridge has no rate).
+    let plan =
+        rtcan_model::Robot::load(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../robot.toml"))
+            .unwrap();
+    for (i, name) in MODULES.iter().enumerate().skip(1) {
+        let m = plan.modules.iter().position(|m| m.name == *name).unwrap();
+        let lowest = (0..plan.nodes.len())
+            .filter(|&n| plan.nodes[n].module == m)
+            .min_by_key(|&n| (plan.nodes[n].priority, n))
+            .unwrap();
+        let period_ms = plan
+            .topics
+            .iter()
+            .filter(|t| t.publisher == lowest)
+            .filter_map(|t| t.rate_hz)
+            .map(|hz| (1000.0 / hz).ceil() as u64)
+            .min()
+            .unwrap();
         let at = synced_ms[i].unwrap_or(u64::MAX);
-        assert!(at <= 30 + app_period, "{} synced at {at} ms", MODULES[i]);
+        assert!(
+            at <= 30 + period_ms,
+            "{name} synced at {at} ms (its logging node's period {period_ms} ms)"
+        );
     }
     for (i, name) in MODULES.iter().enumerate() {
         let lines = rtcan_emu::rtt::decode(&image(name), &raw[i]).unwrap();
