@@ -5,7 +5,7 @@ use crate::elf;
 use crate::periph::{Adc, Afio, Exti, Flash, Gpio, Iwdg, Rcc, Tim2, APB1_CAN, PS};
 use crate::scs::Scs;
 use crate::serial::{Dma, Usart, USART1_DR};
-use crate::sites::{Site, Sites};
+use crate::sites::{Block, Site, Sites};
 use crate::uc::*;
 use crate::Access;
 use core::ffi::c_void;
@@ -88,6 +88,11 @@ pub struct Slices {
     pub returns_in_run: u64,
     /// A fault or anything else.
     pub other: u64,
+    /// Runs that stopped past their budget (a block boundary after the point planned),
+    /// and by how many instructions: the emulator's event latency beyond the model.
+    pub late: u64,
+    pub late_sum: u64,
+    pub late_max: u64,
 }
 
 /// Everything the callbacks reach (boxed: Unicorn holds its address).
@@ -100,11 +105,25 @@ pub struct State {
     base_instr: u64,
     /// Picoseconds per instruction at the current clocks.
     instr_ps: f64,
+    /// `instructions` at which the current run ends: the block hook stops the run at the
+    /// first block boundary at or past it (`on_block`).
     budget: u64,
+    /// Instructions of the translation block executing now, counted into `instructions`
+    /// when it has run (at the next block's hook, an exception return inside the run, or
+    /// the run's end): during a block, time is the block's start (`on_block`).
+    block_n: u64,
+    /// The block executing now: address, size in bytes, and where in it the last
+    /// peripheral access was (`access::Cursor`): time inside the block is its start plus
+    /// the instructions before that access.
+    block_addr: u32,
+    block_size: u32,
+    cursor: crate::access::Cursor,
+    /// The block executing now ends with an instruction that may unmask an interrupt.
+    unmask_end: bool,
+    /// The block executing now ends with a WFI; the address after it.
+    wfi_end: Option<u32>,
     /// Where a run that ended asleep resumes (`sleep_at`).
     resume_pc: Option<u32>,
-    /// The instruction at which the current run was asked to stop (`on_code`).
-    stop_at: Option<u32>,
     /// What set `budget` last (why the current run will end there).
     budget_why: Why,
     /// The emulated time (ps) the current `run_until` runs to.
@@ -147,7 +166,7 @@ pub struct State {
     dbg_cr: u32,
     /// Bus bit time in ps (from BTR and PCLK1) and the bus clock origin.
     pub bit_ps: u64,
-    /// The image's WFI / `b .` / unmask instructions (`on_code`).
+    /// The image's WFI / `b .` / unmask instructions and instruction lengths (`on_block`).
     sites: Sites,
     /// Stores into the ranges given to `Mcu::watch_writes`, in order.
     pub writes: Vec<WriteRecord>,
@@ -159,13 +178,35 @@ pub struct State {
 impl State {
     /// Emulated time now (ps).
     pub fn now(&self) -> u64 {
-        self.base_ps + ((self.instructions - self.base_instr) as f64 * self.instr_ps) as u64
+        self.base_ps + ((self.position() - self.base_instr) as f64 * self.instr_ps) as u64
+    }
+
+    /// Instructions retired up to now: those of finished blocks, and inside the block
+    /// executing now those before its last peripheral access (`access`).
+    fn position(&self) -> u64 {
+        self.instructions + u64::from(self.cursor.pos)
+    }
+
+    /// Counts the block that has run to its end (`block_n`) into `instructions`.
+    fn block_done(&mut self) {
+        self.instructions += core::mem::take(&mut self.block_n);
+        self.cursor = Default::default();
+    }
+
+    /// Matches a peripheral access of the block executing now to its instruction, so
+    /// that `now` is the access's time (`access::Cursor`).
+    fn locate(&mut self, write: bool, size: u32, addr: u32) {
+        let (base, len) = (self.block_addr, self.block_size);
+        let sites = &self.sites;
+        self.cursor.locate(write, size, addr, len, |off| {
+            sites.halfword(base.wrapping_add(off))
+        });
     }
 
     fn retime(&mut self) {
         let now = self.now();
         self.base_ps = now;
-        self.base_instr = self.instructions;
+        self.base_instr = self.position();
         let ws = f64::from(self.flash.wait_states());
         let cycles = self.timing.cpi + ws * self.timing.per_wait_state;
         self.instr_ps = cycles * PS as f64 / self.rcc.hclk().max(1) as f64;
@@ -457,9 +498,12 @@ impl State {
                 let exec = self.scs.execution_priority(primask, faultmask, basepri);
                 self.scs.next_exception(exec).is_some()
             };
+        // Inside a block nothing can stop the core (Unicorn checks for a stop only when a
+        // block starts): the run ends at the end of this block, `block_n` instructions on.
+        let block_end = self.instructions + self.block_n.max(1);
         if stop {
-            if self.instructions + 1 < self.budget {
-                self.budget = self.instructions + 1;
+            if block_end < self.budget {
+                self.budget = block_end;
                 self.budget_why = Why::Replan;
             }
             return;
@@ -467,10 +511,9 @@ impl State {
         if let Some(e) = self.next_event() {
             let left = e.saturating_sub(self.now());
             let n = ((left as f64 / self.instr_ps.max(1.0)) as u64).max(1);
-            // The storing instruction is counted: n more execute, as `run_until` would
-            // let run from the boundary after it.
-            if self.instructions + n + 1 < self.budget {
-                self.budget = self.instructions + n + 1;
+            // `now` is this access's instruction: the event is n instructions from there.
+            if self.position() + n < self.budget {
+                self.budget = self.position() + n;
                 self.budget_why = Why::Event;
             }
         }
@@ -508,6 +551,7 @@ extern "C" fn mmio_read(_uc: *mut uc_engine, off: u64, size: u32, ud: *mut c_voi
     // the thread running `uc_emu_start`, while `Mcu` holds no other borrow of it.
     let st = unsafe { &mut *ud.cast::<State>() };
     let addr = region_base(off);
+    st.locate(false, size, addr);
     match st.read(addr, size) {
         Ok(v) => u64::from(v >> (8 * (addr & 3))),
         Err(a) => {
@@ -521,6 +565,7 @@ extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
     let addr = region_base(off);
+    st.locate(true, size, addr);
     // Byte and half-word writes land in their lane of the 32-bit register.
     let lane = 8 * (addr & 3);
     let aligned = addr & !3;
@@ -551,7 +596,7 @@ extern "C" fn mmio_write(_uc: *mut uc_engine, off: u64, size: u32, v: u64, ud: *
         || (0x4000_6400..0x4000_6800).contains(&aligned)
         || (0xE000_E000..0xE000_F000).contains(&aligned);
     // Stopping here, inside an instruction, would resume at a stale PC: `after_write`
-    // shortens the budget instead, and the code hook stops before the next instruction.
+    // shortens the budget instead, and the block hook stops at the next block.
     if replan {
         st.after_write();
     }
@@ -563,50 +608,100 @@ fn region_base(off: u64) -> u32 {
     off as u32
 }
 
-/// The one code hook (see `sites` for why one): counts the instruction that is about to
-/// execute, ends the run at the budget, and acts on the image's WFI / `b .` / unmask sites.
-extern "C" fn on_code(uc: *mut uc_engine, addr: u64, _size: u32, ud: *mut c_void) {
+/// The one hook on the code (see `sites` for why one, and docs/EMULATOR.md "Time" for
+/// why per block): called as each translation block starts, before any of its
+/// instructions. It counts the block that has just run, ends the run at the first block
+/// boundary at or past the budget, and acts on the image's WFI / `b .` / unmask sites.
+///
+/// In Unicorn 2.0.1 the block hook is emitted ahead of the block's exit-request check
+/// (`translator_loop`, `gen_tb_start`), so a stop requested here ends the run before the
+/// block's first instruction: the PC is the block's start, nothing of it ran.
+extern "C" fn on_block(uc: *mut uc_engine, addr: u64, size: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
-    st.instructions += 1;
+    st.block_done();
+    st.wfi_end = None;
+    // The block before ended with CPSIE / MSR PRIMASK / MSR BASEPRI (QEMU ends a block
+    // after each: they change what may interrupt), and something is pending: end the
+    // run here, right after it, so that the interrupt is taken where the NVIC would.
+    // With nothing pending (pending state changes only at run boundaries and in
+    // `after_write`, which ends the run itself when an exception can be taken),
+    // unmasking lets nothing in: the run goes on.
+    if core::mem::take(&mut st.unmask_end) && st.scs.any_pending() && st.instructions < st.budget {
+        st.budget = st.instructions;
+        st.budget_why = Why::Unmask;
+    }
     if st.instructions >= st.budget {
+        let late = st.instructions - st.budget;
+        if late > 0 {
+            st.slices.late += 1;
+            st.slices.late_sum += late;
+            st.slices.late_max = st.slices.late_max.max(late);
+        }
         // SAFETY: `uc` is the engine calling this hook.
         unsafe { uc_emu_stop(uc) };
-        // The instruction normally does not execute (Unicorn checks the stop request
-        // right after the hook): `run_until` uncounts it when the run ends on it. Inside
-        // an IT block no check follows the hook and the instructions up to the block's
-        // end run (and are counted here). Its site is acted on when the next run reaches it.
-        st.stop_at.get_or_insert(addr as u32);
         return;
     }
-    match st.sites.at(addr as u32) {
+    let addr = addr as u32;
+    let block = match st.sites.block(addr, size) {
+        Some(b) => b,
         // Code in SRAM: the emulator writes SRAM without invalidating translated code
         // (`State::write_from`), so it cannot run code from there. No image does.
-        None if (addr as u32).wrapping_sub(SRAM_BASE) < SRAM_SIZE => {
+        None if addr.wrapping_sub(SRAM_BASE) < SRAM_SIZE => {
             st.fault = Some(format!("code executing from SRAM at {addr:#010x}"));
             // SAFETY: `uc` is the engine calling this hook.
             unsafe { uc_emu_stop(uc) };
+            return;
         }
-        None => {}
+        // Outside the scanned image (no Triskar2 image goes there): counted from memory.
+        None => Block {
+            n: count_in_memory(st, addr, size),
+            first: None,
+            last: None,
+        },
+    };
+    match block.first {
         // `b .`: a spin that only an interrupt leaves (RTIC's idle without an idle task).
         // Equivalent to sleeping: time jumps to the next event, PC stays.
-        Some(Site::Spin) => sleep_at(uc, st, addr as u32 | 1),
-        // WFI: sleep, and resume past the 16-bit WFI (Thumb bit set).
-        Some(Site::Wfi) => sleep_at(uc, st, addr as u32 + 3),
-        // An instruction that may unmask a pending interrupt: end the run right after it,
-        // so the interrupt is taken there (as the NVIC would) rather than at the end of
-        // the run. +2: the run stops before the instruction after the next one (at most
-        // one instruction late), as when this was a hook of its own called after the
-        // counting hook.
-        // With nothing pending (pending state changes only at run boundaries and in
-        // `after_write`, which ends the run itself when an exception can be taken),
-        // unmasking lets nothing in: the run goes on.
-        Some(Site::Unmask) if st.scs.any_pending() && st.instructions + 2 < st.budget => {
-            st.budget = st.instructions + 2;
-            st.budget_why = Why::Unmask;
+        Some(Site::Spin) => {
+            st.instructions += 1;
+            return sleep_at(uc, st, addr | 1);
         }
-        Some(Site::Unmask) => {}
+        // WFI: sleep, and resume past the 16-bit WFI (Thumb bit set).
+        Some(Site::Wfi) => {
+            st.instructions += 1;
+            return sleep_at(uc, st, addr + 3);
+        }
+        _ => {}
     }
+    st.block_n = u64::from(block.n);
+    st.block_addr = addr;
+    st.block_size = size;
+    match block.last {
+        Some(Site::Unmask) => st.unmask_end = true,
+        // A WFI that ends a longer block executes in Unicorn: with no interrupt request
+        // of its own (the model takes exceptions, not Unicorn) the core halts and the
+        // run ends with the PC after it, which `run_until` reads as sleep.
+        Some(Site::Wfi) => st.wfi_end = Some(addr.wrapping_add(size)),
+        _ => {}
+    }
+}
+
+/// Instructions in the `size` bytes at `addr`, read from emulated memory (the slow path
+/// of `on_block`, for code outside the image's site table).
+fn count_in_memory(st: &State, addr: u32, size: u32) -> u32 {
+    let mut bytes = vec![0u8; size as usize];
+    st.read_into(addr, &mut bytes);
+    let (mut i, mut n) = (0usize, 0u32);
+    while let Some(h) = bytes.get(i..i + 2) {
+        n += 1;
+        let hw = u16::from_le_bytes([
+            h.first().copied().unwrap_or(0),
+            h.get(1).copied().unwrap_or(0),
+        ]);
+        i += if crate::sites::is_wide(hw) { 4 } else { 2 };
+    }
+    n
 }
 
 /// Ends the run before the current instruction, asleep, resuming at `pc`.
@@ -628,6 +723,10 @@ fn sleep_at(uc: *mut uc_engine, st: &mut State, pc: u32) {
 extern "C" fn on_intr(uc: *mut uc_engine, intno: u32, ud: *mut c_void) {
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
+    // The block that branched here has run (the branch was its last instruction).
+    st.block_done();
+    st.unmask_end = false;
+    st.wfi_end = None;
     // A branch to EXC_RETURN (0xFFFFFFxx) faults in Unicorn's thread mode (the region is
     // execute-never): that is the exception return. Anything else is a CPU fault of the image
     // (UDF of a panic, bad instruction): reported, not modelled as HardFault.
@@ -732,6 +831,7 @@ impl Drop for Mcu {
 impl Mcu {
     /// An MCU with `elf_bytes` programmed into flash, held in reset.
     pub fn new(name: &str, elf_bytes: &[u8], timing: Timing) -> Result<Mcu, EmuError> {
+        crate::link_allocator();
         let image = elf::load_segments(elf_bytes).map_err(EmuError::Elf)?;
         let rtt = elf::symbol(elf_bytes, "_SEGGER_RTT").map_err(EmuError::Elf)?;
         let mut uc: *mut uc_engine = core::ptr::null_mut();
@@ -757,7 +857,12 @@ impl Mcu {
             base_instr: 0,
             instr_ps: 0.0,
             budget: 0,
-            stop_at: None,
+            block_n: 0,
+            block_addr: 0,
+            block_size: 0,
+            cursor: Default::default(),
+            unmask_end: false,
+            wfi_end: None,
             resume_pc: None,
             budget_why: Why::Until,
             run_end: 0,
@@ -854,8 +959,8 @@ impl Mcu {
             )?;
             let mut h: uc_hook = 0;
             check(
-                "hook code",
-                uc_hook_add(uc, &mut h, UC_HOOK_CODE, on_code as *mut c_void, ud, 1, 0),
+                "hook block",
+                uc_hook_add(uc, &mut h, UC_HOOK_BLOCK, on_block as *mut c_void, ud, 1, 0),
             )?;
             check(
                 "hook intr",
@@ -1095,6 +1200,15 @@ impl Mcu {
             // address 0 is reported as a fault below.
             // SAFETY: live engine.
             let e = unsafe { uc_emu_start(self.uc, u64::from(pc | 1), 0, 0, 0) };
+            // The last block ran to its end unless the hook stopped the run (then
+            // `block_n` is 0): count it.
+            self.st.block_done();
+            self.st.unmask_end = false;
+            if let Some(after) = self.st.wfi_end.take() {
+                if e == 0 && self.reg(REG_PC) & !1 == after & !1 {
+                    self.st.wfi = true;
+                }
+            }
             let sl = &mut self.st.slices;
             if self.st.exc_return {
                 sl.exc_return += 1;
@@ -1110,17 +1224,6 @@ impl Mcu {
                 }
             } else {
                 sl.other += 1;
-            }
-            // The instruction the run stopped at was counted by the hook but did not
-            // execute (the PC is still there): uncount it, so that time does not depend
-            // on where runs end. (Before, each run's end added one instruction of time.)
-            if self
-                .st
-                .stop_at
-                .take()
-                .is_some_and(|a| self.reg(REG_PC) & !1 == a & !1)
-            {
-                self.st.instructions -= 1;
             }
             if let Some(pc) = self.st.resume_pc.take() {
                 self.set_reg(REG_PC, pc & !1);
@@ -1153,6 +1256,9 @@ impl Mcu {
     }
 }
 
+/// EPSR.IT of the xPSR: bits 26:25 and 15:10 (ARMv7-M B1.4.2).
+const XPSR_IT: u32 = 0x0600_FC00;
+
 /// Exception entry and return, here rather than on `Mcu` so that `on_intr` can do an
 /// exception return inside a run (`State::return_in_run`).
 impl State {
@@ -1170,8 +1276,9 @@ impl State {
             Some(_) => Why::Event,
             None => Why::Until,
         };
-        // n instructions execute; the hook of the next one ends the run.
-        self.budget = self.instructions + n.clamp(1, CHUNK) + 1;
+        // n instructions execute, rounded up to the end of the block that reaches them:
+        // the hook of the block after it ends the run.
+        self.budget = self.instructions + n.clamp(1, CHUNK);
         self.scs.reschedule = false;
     }
 
@@ -1188,7 +1295,6 @@ impl State {
         let loop_needed = after >= self.run_end
             || self.fault.is_some()
             || self.wfi
-            || self.stop_at.is_some()
             || self.resume_pc.is_some()
             || (self.stop_on_txrq && self.txrq_at.is_some())
             || self.scs.reset_request
@@ -1264,6 +1370,12 @@ impl State {
         }
         self.write_from(sp, &bytes);
         self.set_reg(REG_SP, sp);
+        // The handler starts outside any IT block (B1.5.6: EPSR.IT cleared on entry; the
+        // stacked xPSR keeps them for the return). A run can end between two blocks of
+        // an IT block (QEMU ends a block at a 1 KiB page boundary), and Unicorn keeps
+        // the IT state across the PC write: left set, it would make the handler's first
+        // instructions conditional. The exception number stays 0 (see `return_in_run`).
+        self.set_reg(REG_XPSR, xpsr & !(XPSR_IT | 0x1FF));
         // Return to thread mode on the main stack, or to handler mode when nested.
         let exc_return = if self.scs.active.is_empty() {
             0xFFFF_FFF9
@@ -1363,6 +1475,7 @@ extern "C" fn read_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, ud: *mut
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(0x4000_0000, off);
+    st.locate(false, 4, 0x4200_0000 + off as u32);
     match st.read(addr, 4) {
         Ok(v) => u64::from((v >> bit) & 1),
         Err(a) => {
@@ -1376,6 +1489,7 @@ extern "C" fn write_bb_periph(_uc: *mut uc_engine, off: u64, _size: u32, v: u64,
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(0x4000_0000, off);
+    st.locate(true, 4, 0x4200_0000 + off as u32);
     let r = st.read(addr, 4).and_then(|old| {
         let new = if v & 1 != 0 {
             old | (1 << bit)
@@ -1393,6 +1507,7 @@ extern "C" fn read_bb_sram(_uc: *mut uc_engine, off: u64, _size: u32, ud: *mut c
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(SRAM_BASE, off);
+    st.locate(false, 4, 0x2200_0000 + off as u32);
     let mut b = [0u8; 4];
     st.read_into(addr, &mut b);
     u64::from((u32::from_le_bytes(b) >> bit) & 1)
@@ -1402,6 +1517,7 @@ extern "C" fn write_bb_sram(_uc: *mut uc_engine, off: u64, _size: u32, v: u64, u
     // SAFETY: as in `mmio_read`.
     let st = unsafe { &mut *ud.cast::<State>() };
     let (addr, bit) = bitband(SRAM_BASE, off);
+    st.locate(true, 4, 0x2200_0000 + off as u32);
     let mut b = [0u8; 4];
     st.read_into(addr, &mut b);
     let old = u32::from_le_bytes(b);

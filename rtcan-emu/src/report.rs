@@ -82,5 +82,12 @@ fn runs_json(s: &crate::mcu::Slices) -> Value {
         "event": s.event, "until": s.until, "chunk": s.chunk, "unmask": s.unmask,
         "replan": s.replan, "sleep": s.sleep, "exc_return": s.exc_return, "other": s.other,
         "returns_in_run": s.returns_in_run,
+        // Runs that ended past their planned instruction (at the next block boundary),
+        // and by how many instructions: the emulator's own event latency (mcu::on_block).
+        "late": {
+            "runs": s.late,
+            "mean_instructions": if s.late == 0 { 0.0 } else { s.late_sum as f64 / s.late as f64 },
+            "max_instructions": s.late_max,
+        },
     })
 }

@@ -17,7 +17,7 @@ pub const UC_CPU_ARM_CORTEX_M3: i32 = 8;
 
 pub const UC_PROT_ALL: u32 = 7;
 pub const UC_HOOK_INTR: i32 = 1;
-pub const UC_HOOK_CODE: i32 = 4;
+pub const UC_HOOK_BLOCK: i32 = 8;
 pub const UC_HOOK_MEM_UNMAPPED: i32 = 112;
 pub const UC_HOOK_MEM_WRITE: i32 = 2048;
 
