@@ -86,6 +86,8 @@ pub struct Slices {
     pub exc_return: u64,
     /// Exception returns done inside the run (`State::return_in_run`): not run ends.
     pub returns_in_run: u64,
+    /// Exceptions entered inside the run right after an unmask (`State::enter_in_run`).
+    pub entries_in_run: u64,
     /// A fault or anything else.
     pub other: u64,
     /// Runs that stopped past their budget (a block boundary after the point planned),
@@ -622,14 +624,24 @@ extern "C" fn on_block(uc: *mut uc_engine, addr: u64, size: u32, ud: *mut c_void
     st.block_done();
     st.wfi_end = None;
     // The block before ended with CPSIE / MSR PRIMASK / MSR BASEPRI (QEMU ends a block
-    // after each: they change what may interrupt), and something is pending: end the
-    // run here, right after it, so that the interrupt is taken where the NVIC would.
-    // With nothing pending (pending state changes only at run boundaries and in
+    // after each: they change what may interrupt), and something is pending: the
+    // interrupt is taken here, right after it, where the NVIC would — inside the run
+    // (`State::enter_in_run`), or by ending the run here when the loop must act. With
+    // nothing pending (pending state changes only at run boundaries and in
     // `after_write`, which ends the run itself when an exception can be taken),
     // unmasking lets nothing in: the run goes on.
     if core::mem::take(&mut st.unmask_end) && st.scs.any_pending() && st.instructions < st.budget {
-        st.budget = st.instructions;
-        st.budget_why = Why::Unmask;
+        match st.enter_in_run(addr as u32) {
+            Some(true) => {
+                st.slices.entries_in_run += 1;
+                return;
+            }
+            Some(false) => {}
+            None => {
+                st.budget = st.instructions;
+                st.budget_why = Why::Unmask;
+            }
+        }
     }
     if st.instructions >= st.budget {
         let late = st.instructions - st.budget;
@@ -1311,6 +1323,36 @@ impl State {
         self.take_pending();
         self.plan_run(self.run_end);
         true
+    }
+
+    /// A pending exception after an unmask, met by the block hook at the start of the
+    /// block at `pc` (nothing of it has run): taken there inside the run when the loop
+    /// would only take it and start the next run — what it does between two runs, at
+    /// the same emulated time. Some(true): entered (the PC write makes Unicorn restart
+    /// at the vector; with a PC write pending, it does not put the PC back to the
+    /// block's start). Some(false): nothing can be taken at the current priority, the
+    /// run goes on. None: the loop must act (a fault, a reset, the watchdog, a transmit
+    /// request the bus waits for).
+    fn enter_in_run(&mut self, pc: u32) -> Option<bool> {
+        let loop_needed = self.fault.is_some()
+            || (self.stop_on_txrq && self.txrq_at.is_some())
+            || self.scs.reset_request
+            || self.iwdg.deadline.is_some_and(|d| d <= self.now());
+        if loop_needed {
+            return None;
+        }
+        let primask = self.reg(REG_PRIMASK) & 1 != 0;
+        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
+        let basepri = self.reg(REG_BASEPRI) as u8;
+        let exec = self.scs.execution_priority(primask, faultmask, basepri);
+        if self.scs.next_exception(exec).is_none() {
+            return Some(false);
+        }
+        // The block's start is the return address (stacked by `enter`).
+        self.set_reg(REG_PC, pc | 1);
+        self.take_pending();
+        self.plan_run(self.run_end);
+        Some(true)
     }
 
     fn set_reg(&mut self, r: i32, v: u32) {

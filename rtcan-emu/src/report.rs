@@ -82,6 +82,7 @@ fn runs_json(s: &crate::mcu::Slices) -> Value {
         "event": s.event, "until": s.until, "chunk": s.chunk, "unmask": s.unmask,
         "replan": s.replan, "sleep": s.sleep, "exc_return": s.exc_return, "other": s.other,
         "returns_in_run": s.returns_in_run,
+        "entries_in_run": s.entries_in_run,
         // Runs that ended past their planned instruction (at the next block boundary),
         // and by how many instructions: the emulator's own event latency (mcu::on_block).
         "late": {
