@@ -1570,3 +1570,7 @@ extern "C" fn write_bb_sram(_uc: *mut uc_engine, off: u64, _size: u32, v: u64, u
     };
     st.write_from(addr, &new.to_le_bytes());
 }
+
+#[cfg(test)]
+#[path = "mcu_tests.rs"]
+mod tests;
