@@ -260,7 +260,7 @@ impl State {
 
     /// Writes emulated memory: SRAM straight into its host memory, anything else through
     /// Unicorn. A direct write does not invalidate translated code, which is right for
-    /// SRAM because no image executes from it (`on_code` faults if one does); and it saves
+    /// SRAM because no image executes from it (`on_block` faults if one does); and it saves
     /// the page-collection lock (a GTree, malloc/free) of every `uc_mem_write`.
     fn write_from(&mut self, addr: u32, bytes: &[u8]) {
         if let Some(off) = Self::sram_offset(addr, bytes.len()) {
