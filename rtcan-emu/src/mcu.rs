@@ -494,10 +494,7 @@ impl State {
             || self.scs.reset_request
             || (self.stop_on_txrq && self.txrq_at.is_some())
             || {
-                let primask = self.reg(REG_PRIMASK) & 1 != 0;
-                let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
-                let basepri = self.reg(REG_BASEPRI) as u8;
-                let exec = self.scs.execution_priority(primask, faultmask, basepri);
+                let exec = self.execution_priority();
                 self.scs.next_exception(exec).is_some()
             };
         // Inside a block nothing can stop the core (Unicorn checks for a stop only when a
@@ -519,6 +516,15 @@ impl State {
                 self.budget_why = Why::Event;
             }
         }
+    }
+
+    /// The core's execution priority from PRIMASK, FAULTMASK and BASEPRI (B1.5.4): what a
+    /// pending exception must beat to be taken now.
+    fn execution_priority(&self) -> i16 {
+        let primask = self.reg(REG_PRIMASK) & 1 != 0;
+        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
+        let basepri = self.reg(REG_BASEPRI) as u8;
+        self.scs.execution_priority(primask, faultmask, basepri)
     }
 
     fn reg(&self, r: i32) -> u32 {
@@ -1341,10 +1347,7 @@ impl State {
         if loop_needed {
             return None;
         }
-        let primask = self.reg(REG_PRIMASK) & 1 != 0;
-        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
-        let basepri = self.reg(REG_BASEPRI) as u8;
-        let exec = self.scs.execution_priority(primask, faultmask, basepri);
+        let exec = self.execution_priority();
         if self.scs.next_exception(exec).is_none() {
             return Some(false);
         }
@@ -1476,10 +1479,7 @@ impl State {
     }
 
     fn take_pending(&mut self) -> bool {
-        let primask = self.reg(REG_PRIMASK) & 1 != 0;
-        let faultmask = self.reg(REG_FAULTMASK) & 1 != 0;
-        let basepri = self.reg(REG_BASEPRI) as u8;
-        let exec = self.scs.execution_priority(primask, faultmask, basepri);
+        let exec = self.execution_priority();
         if let Some(exc) = self.scs.next_exception(exec) {
             self.wfi = false;
             self.enter(exc);
